@@ -1,0 +1,64 @@
+"""diefab: design, simulate and fabricate dice with unequal face probabilities.
+
+The core (geometry, mass, models, targets, statistics, designs, optimizer)
+imports with NumPy alone; SciPy, trimesh, pybullet, manifold3d and matplotlib
+are imported by the functions that need them.
+"""
+
+from .design import Design, design_to_toml, list_templates, load_design, parse_design
+from .errors import (
+    DesignError,
+    DiefabError,
+    FabricationError,
+    GeometryError,
+    OutputError,
+    PhysicsError,
+    StatsError,
+    TargetError,
+)
+from .families import GEM, Family, Parameter, gem_center_of_mass_y, gem_vertices
+from .geometry import Polyhedron, face_margins, solid_angles, up_faces
+from .mass import Fill, MassProperties, mass_properties
+from .models import MODELS, face_probabilities, value_probabilities
+from .stats import GoodnessOfFit, goodness_of_fit, jsd, pearson_divergence, tvd
+from .targets import Target, parse_target
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "GEM",
+    "MODELS",
+    "Design",
+    "DesignError",
+    "DiefabError",
+    "FabricationError",
+    "Family",
+    "Fill",
+    "GeometryError",
+    "GoodnessOfFit",
+    "MassProperties",
+    "OutputError",
+    "Parameter",
+    "PhysicsError",
+    "Polyhedron",
+    "StatsError",
+    "Target",
+    "TargetError",
+    "design_to_toml",
+    "face_margins",
+    "face_probabilities",
+    "gem_center_of_mass_y",
+    "gem_vertices",
+    "goodness_of_fit",
+    "jsd",
+    "list_templates",
+    "load_design",
+    "mass_properties",
+    "parse_design",
+    "parse_target",
+    "pearson_divergence",
+    "solid_angles",
+    "tvd",
+    "up_faces",
+    "value_probabilities",
+]

@@ -1,0 +1,298 @@
+"""The ``diefab`` command line: parse, call the library, write files, print.
+
+Every error a user can cause ends in one line on stderr and exit status 2;
+Ctrl-C ends with status 130.  Outputs are written atomically.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import click
+import numpy as np
+
+from .design import Design, format_value, load_design
+from .errors import DiefabError
+
+# ----------------------------------------------------------------------
+# shared plumbing
+
+
+def _console(stderr: bool = False):
+    from rich.console import Console
+
+    return Console(stderr=stderr, highlight=False)
+
+
+def emit_json(obj: Any) -> None:
+    """Print one JSON object on stdout."""
+    click.echo(json.dumps(obj, indent=2, default=_json_default, ensure_ascii=False))
+
+
+def _json_default(obj: Any):
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"cannot serialize {type(obj).__name__}")
+
+
+def parse_params(items: tuple[str, ...]) -> dict[str, float]:
+    """``("a=1.2", "b=0.5")`` -> ``{"a": 1.2, "b": 0.5}``."""
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            raise click.BadParameter(f"{item!r} is not NAME=VALUE", param_hint="--param")
+        try:
+            out[name.strip()] = float(value)
+        except ValueError:
+            raise click.BadParameter(f"{item!r}: {value!r} is not a number", param_hint="--param") from None
+    return out
+
+
+def design_argument(func):
+    """Add the DESIGN argument and ``--param NAME=VALUE`` overrides to a command."""
+    func = click.option(
+        "--param",
+        "params",
+        multiple=True,
+        metavar="NAME=VALUE",
+        help="Override a design parameter, e.g. --param a=1.2 (repeatable).",
+    )(func)
+    return click.argument("design", metavar="DESIGN")(func)
+
+
+def get_design(spec: str, params: tuple[str, ...] = (), target: str | None = None) -> Design:
+    """Load DESIGN (template name or TOML path) and apply overrides."""
+    design = load_design(spec)
+    if params:
+        design = design.with_params(**parse_params(params))
+    if target is not None:
+        design = design.with_target(target)
+    return design
+
+
+def values_dict(design: Design, probs: np.ndarray) -> dict[str, float]:
+    """``{"-4": p, ...}`` keyed by the design's values."""
+    return {str(v): float(p) for v, p in zip(design.support, probs)}
+
+
+def out_option(func):
+    return click.option(
+        "--out",
+        "out_dir",
+        type=click.Path(file_okay=False, path_type=Path),
+        default=Path("out"),
+        show_default=True,
+        help="Output folder.",
+    )(func)
+
+
+def json_option(func):
+    return click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")(func)
+
+
+# ----------------------------------------------------------------------
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"], "max_content_width": 100})
+@click.version_option(package_name="diefab")
+def cli() -> None:
+    """Design, simulate and fabricate dice with unequal face probabilities."""
+
+
+@cli.command()
+@json_option
+def templates(as_json: bool) -> None:
+    """List the shipped design templates."""
+    from .design import list_templates
+
+    designs = list_templates()
+    if as_json:
+        emit_json({d.name: d.description for d in designs})
+        return
+    width = max(len(d.name) for d in designs)
+    for d in designs:
+        click.echo(f"{d.name:<{width}}  {d.description}")
+
+
+@cli.command()
+@design_argument
+@click.option("--model", default="solid-angle", show_default=True, help="Landing model.")
+@click.option(
+    "--fill", type=click.Choice(["solid", "shell", "print"]), default=None, help="Override the design's fill."
+)
+@click.option("--target", default=None, help="Override the design's target distribution.")
+@json_option
+def predict(design: str, params, model: str, fill: str | None, target: str | None, as_json: bool) -> None:
+    """Landing probabilities, centre of mass and stability margins of DESIGN."""
+    from dataclasses import replace
+
+    from .models import face_probabilities, to_values
+    from .stats import jsd, pearson_divergence, tvd
+
+    d = get_design(design, params, target)
+    fill_model = replace(d.fill, kind=fill) if fill else d.fill
+    d.check_stable(0.0, fill_model)
+    poly = d.polyhedron
+    faces = face_probabilities(d, model, fill_model)
+    values = to_values(d, faces)
+    goal = d.target_distribution.aligned(d.support)
+    com = d.mass_properties(fill_model).center
+    margins = d.margins(fill_model)
+    result = {
+        "design": d.name,
+        "model": model,
+        "fill": fill_model.kind,
+        "params": dict(d.params),
+        "target": d.target,
+        "faces": [
+            {
+                "name": n,
+                "value": d.values[n],
+                "label_face": d.label_face[n],
+                "probability": float(p),
+                "margin": float(m),
+            }
+            for n, p, m in zip(poly.names, faces, margins)
+        ],
+        "values": values_dict(d, values),
+        "target_values": values_dict(d, goal),
+        "center_of_mass": com.tolist(),
+        "margins": {n: float(m) for n, m in zip(poly.names, margins)},
+        "min_margin": float(margins.min()),
+        "objective": pearson_divergence(values, goal),
+        "tvd": tvd(values, goal),
+        "jsd": jsd(goal, values),
+    }
+    if as_json:
+        emit_json(result)
+        return
+    from rich.table import Table
+
+    con = _console()
+    params_text = " ".join(f"{k}={v:g}" for k, v in d.params.items())
+    con.print(f"[bold]{d.name}[/bold]  {params_text}  model={model}  fill={fill_model.kind}")
+    con.print(f"centre of mass: ({com[0]:.4f}, {com[1]:.4f}, {com[2]:.4f})  model units")
+    table = Table("face", "value", "label on", "probability", "margin")
+    for f in result["faces"]:
+        table.add_row(
+            f["name"],
+            format_value(f["value"], min(d.support) < 0),
+            f["label_face"] or "(vertex)",
+            f"{f['probability']:.4f}",
+            f"{f['margin']:.4f}",
+        )
+    con.print(table)
+    table = Table("value", "predicted", "target", "difference")
+    for v, p, q in zip(d.support, values, goal):
+        table.add_row(str(v), f"{p:.4f}", f"{q:.4f}", f"{p - q:+.4f}")
+    con.print(table)
+    con.print(f"Eq. (2) objective {result['objective']:.5f}   TVD {result['tvd']:.4f}   JSD {result['jsd']:.5f}")
+
+
+@cli.command()
+@click.option("--counts", default=None, metavar="C1,C2,...", help="Counts of each value, in increasing value order.")
+@click.option(
+    "--rolls",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help="Text or CSV log of rolled values.",
+)
+@click.option("--target", required=True, help="Target distribution, e.g. 4df or 1,4,10,16,19,16,10,4,1.")
+@click.option("--alpha", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.05, show_default=True)
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the Monte-Carlo p-value.")
+@json_option
+def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, seed: int, as_json: bool) -> None:
+    """Test rolls against a target: chi2, G, TVD, JSD, intervals, power."""
+    from .errors import StatsError
+    from .stats import chi2_power, counts_from_rolls, goodness_of_fit, parse_counts, read_rolls, rolls_for_power
+    from .targets import parse_target
+
+    if (counts is None) == (rolls is None):
+        raise click.UsageError("give exactly one of --counts and --rolls")
+    if counts is not None:
+        x = parse_counts(counts)
+        goal = parse_target(target)
+        if len(x) != len(goal.values):
+            raise StatsError(f"{len(x)} counts for the {len(goal.values)} values of target {target!r}")
+    else:
+        goal = parse_target(target)
+        x = counts_from_rolls(read_rolls(rolls), goal.values)
+    fit = goodness_of_fit(x, goal.probabilities, alpha=alpha, seed=seed)
+    observed = fit.observed
+    power_n = rolls_for_power(goal.probabilities, observed)
+    result = {
+        "n": fit.n,
+        "target": target,
+        "values": [str(int(v)) for v in goal.values],
+        "counts": {str(int(v)): int(c) for v, c in zip(goal.values, x)},
+        "expected_counts": {str(int(v)): float(e) for v, e in zip(goal.values, fit.expected)},
+        "chi2": fit.chi2,
+        "df": fit.df,
+        "p_value": fit.p_value,
+        "p_value_mc": fit.p_value_mc,
+        "small_expected_counts": fit.small_expected,
+        "g": fit.g,
+        "g_p_value": fit.g_p_value,
+        "tvd": fit.tvd,
+        "jsd": fit.jsd,
+        "expected_tvd": fit.expected_tvd,
+        "expected_jsd": fit.expected_jsd,
+        "alpha": alpha,
+        "intervals": {str(int(v)): [float(lo), float(hi)] for v, (lo, hi) in zip(goal.values, fit.intervals)},
+        "power_at_n": chi2_power(goal.probabilities, observed, fit.n, alpha),
+        "rolls_for_80_percent_power": power_n,
+    }
+    if as_json:
+        emit_json(result)
+        return
+    from rich.table import Table
+
+    con = _console()
+    table = Table("value", "count", "expected", "observed", f"{1 - alpha:.0%} simultaneous CI", "target")
+    for v, c, e, o, (lo, hi), p in zip(goal.values, x, fit.expected, observed, fit.intervals, goal.probabilities):
+        table.add_row(str(int(v)), str(int(c)), f"{e:.1f}", f"{o:.4f}", f"[{lo:.4f}, {hi:.4f}]", f"{p:.4f}")
+    con.print(table)
+    con.print(
+        f"n = {fit.n}   chi2 = {fit.chi2:.3f} (df {fit.df}), p = {fit.p_value:.4f} "
+        f"(Monte-Carlo {fit.p_value_mc:.4f}){'  [some expected counts < 5]' if fit.small_expected else ''}"
+    )
+    con.print(f"G = {fit.g:.3f}, p = {fit.g_p_value:.4f}")
+    con.print(f"TVD = {fit.tvd:.4f} (expected under the target {fit.expected_tvd:.4f})")
+    con.print(f"JSD = {fit.jsd:.5f} (expected under the target {fit.expected_jsd:.5f})")
+    if power_n is not None:
+        con.print(
+            f"If the observed frequencies were the truth, the chi2 test would detect them with power "
+            f"{result['power_at_n']:.2f} at n = {fit.n}, and 80% power needs {power_n} rolls."
+        )
+
+
+# ----------------------------------------------------------------------
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Console entry point: one-line errors, exit status 2 on bad input."""
+    try:
+        rv = cli.main(args=argv, prog_name="diefab", standalone_mode=False)
+    except click.exceptions.Abort:
+        click.echo("diefab: interrupted", err=True)
+        sys.exit(130)
+    except KeyboardInterrupt:
+        click.echo("diefab: interrupted", err=True)
+        sys.exit(130)
+    except click.ClickException as exc:
+        ctx = getattr(exc, "ctx", None)
+        where = f"{ctx.command_path}: " if ctx is not None else "diefab: "
+        click.echo(f"{where}error: {exc.format_message()}".replace("\n", " "), err=True)
+        sys.exit(2)
+    except DiefabError as exc:
+        click.echo(f"diefab: error: {exc}".replace("\n", " "), err=True)
+        sys.exit(2)
+    sys.exit(rv if isinstance(rv, int) else 0)

@@ -1,0 +1,322 @@
+"""Designs: a die family with parameters, face values, labels, target and size.
+
+A design is what a template file holds (TOML, schema in the README).  Load one
+by template name or path with :func:`load_design`, turn it back into TOML with
+:func:`design_to_toml`.
+
+Examples
+--------
+>>> design = load_design("fudge-gem")
+>>> design.params
+{'a': 1.18, 'b': 0.52, 'c': 0.72, 'd': 1.41}
+>>> design.value_of["f5"], design.label_of["f4"]
+(0, '+2')
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from functools import cached_property
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import DesignError, GeometryError
+from .families import family, gem_polyhedron
+from .geometry import Polyhedron, face_margins, up_faces
+from .mass import Fill, MassProperties, mass_properties
+from .targets import Target, parse_target
+
+__all__ = [
+    "Design",
+    "design_to_toml",
+    "format_value",
+    "list_templates",
+    "load_design",
+    "parse_design",
+    "template_path",
+]
+
+#: Resting face -> value of the paper's gem (colors of its Fig. 3).
+GEM_VALUES = {"f1": 3, "f2": 4, "f3": -3, "f4": -4, "f5": 0, "f6": 1, "f7": 2, "f8": -1, "f9": -2}
+
+_KEYS = {
+    "name", "description", "family", "params", "target", "values", "labels", "size_mm",
+    "fill", "physics", "vertices", "faces", "mesh",
+}  # fmt: skip
+
+
+def format_value(value: int, signed: bool) -> str:
+    """The text printed on a face: ``+2``, ``−3`` (true minus sign), ``0``."""
+    if not signed:
+        return str(value)
+    return "0" if value == 0 else f"+{value}" if value > 0 else f"\u2212{-value}"
+
+
+@dataclass(frozen=True, eq=False)
+class Design:
+    """A die design.
+
+    Parameters
+    ----------
+    name : str
+    family : str
+        ``gem``, ``convex`` or ``mesh``.
+    params : mapping str -> float
+        Family parameters (the gem's a, b, c, d and optional e).
+    values : mapping str -> int
+        Value rolled when the die rests on each face (face name -> value).
+    target : str
+        Target distribution specification (see :mod:`diefab.targets`).
+    labels : mapping str -> str
+        Overrides of the computed label text, keyed by the face that carries it.
+    size_mm : float
+        Physical size: the length that measures 2 model units along z (the
+        gem's girdle short side; for ``convex``/``mesh`` the largest side of
+        the bounding box).
+    fill : Fill
+    physics : mapping
+        Simulation settings stored with the design (see :mod:`diefab.physics`).
+    vertices, faces, mesh
+        Geometry of ``convex`` and ``mesh`` designs.
+    """
+
+    name: str
+    family: str
+    params: Mapping[str, float] = field(default_factory=dict)
+    values: Mapping[str, int] = field(default_factory=dict)
+    target: str = "4df"
+    labels: Mapping[str, str] = field(default_factory=dict)
+    size_mm: float = 30.0
+    fill: Fill = field(default_factory=Fill)
+    description: str = ""
+    physics: Mapping[str, Any] = field(default_factory=dict)
+    vertices: tuple[tuple[float, float, float], ...] | None = None
+    faces: tuple[tuple[int, ...], ...] | None = None
+    mesh: Path | None = None
+
+    def __post_init__(self) -> None:
+        fam = family(self.family)
+        object.__setattr__(self, "params", fam.check_params(self.params))
+        if not (isinstance(self.size_mm, (int, float)) and math.isfinite(self.size_mm) and self.size_mm > 0):
+            raise DesignError(f"size_mm={self.size_mm} must be a positive number of millimetres")
+        if self.family == "convex" and self.vertices is None:
+            raise DesignError("a convex design needs 'vertices'")
+        if self.family == "mesh" and self.mesh is None:
+            raise DesignError("a mesh design needs 'mesh' (a file path)")
+        values = dict(self.values) or (GEM_VALUES if self.family == "gem" else {})
+        names = self.polyhedron.names
+        if set(values) != set(names):
+            extra = sorted(set(values) - set(names))
+            missing = [n for n in names if n not in values]
+            what = f"face {extra[0]!r} does not exist" if extra else f"face {missing[0]!r} has no value"
+            raise DesignError(f"design {self.name!r}: values must give every face a value: {what}")
+        for k, v in values.items():
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
+                raise DesignError(f"value of face {k!r} is {v!r}, not an integer")
+        object.__setattr__(self, "values", {n: int(values[n]) for n in names})
+        for k, v in self.labels.items():
+            if k not in names:
+                raise DesignError(f"labels: face {k!r} does not exist (faces: {', '.join(names)})")
+            if not isinstance(v, str):
+                raise DesignError(f"labels: label of face {k!r} must be a string")
+        self.target_distribution  # noqa: B018 -- validate the target against the values now
+        self.label_of  # noqa: B018 -- and that every label has a face
+
+    # ------------------------------------------------------------------
+    @cached_property
+    def polyhedron(self) -> Polyhedron:
+        """The die in model units."""
+        if self.family == "gem":
+            return gem_polyhedron(self.params)
+        try:
+            if self.family == "convex":
+                if self.faces is None:
+                    return Polyhedron.from_points(self.vertices)
+                return Polyhedron(np.array(self.vertices, dtype=float), self.faces)
+            return Polyhedron.from_mesh(self.mesh)
+        except GeometryError as exc:
+            raise DesignError(f"design {self.name!r}: {exc}") from exc
+
+    @property
+    def value_of(self) -> dict[str, int]:
+        """Resting face name -> value."""
+        return dict(self.values)
+
+    @cached_property
+    def support(self) -> list[int]:
+        """The distinct values, increasing."""
+        return sorted(set(self.values.values()))
+
+    @cached_property
+    def target_distribution(self) -> Target:
+        return parse_target(self.target, self.support)
+
+    @cached_property
+    def mm_per_unit(self) -> float:
+        """Millimetres per model unit."""
+        if self.family == "gem":
+            return self.size_mm / 2.0
+        return self.size_mm / float(np.ptp(self.polyhedron.vertices, axis=0).max())
+
+    @cached_property
+    def label_face(self) -> dict[str, str | None]:
+        """Resting face -> the face pointing up that shows its value (None: a vertex or edge is up)."""
+        poly = self.polyhedron
+        return {poly.names[k]: (None if up is None else poly.names[up]) for k, up in enumerate(up_faces(poly))}
+
+    @cached_property
+    def label_of(self) -> dict[str, str]:
+        """Face name -> text printed on it (faces without a label are absent).
+
+        A face carries the value of the resting face that puts it on top;
+        the template's ``labels`` table overrides or adds texts (an empty
+        string removes one).
+        """
+        signed = min(self.support) < 0
+        out: dict[str, str] = {}
+        owner: dict[str, str] = {}
+        for rest, up in self.label_face.items():
+            if up is None:
+                continue
+            if up in owner and up not in self.labels:
+                raise DesignError(
+                    f"face {up} is on top both when resting on {owner[up]} and on {rest}: "
+                    "set its text in the design's [labels] table"
+                )
+            owner[up] = rest
+            out[up] = format_value(self.values[rest], signed)
+        out.update(self.labels)
+        return {k: out[k] for k in self.polyhedron.names if out.get(k)}
+
+    def mass_properties(self, fill: Fill | None = None) -> MassProperties:
+        """Mass properties in model units for the design's (or the given) fill."""
+        return mass_properties(self.polyhedron, fill or self.fill, mm_per_unit=self.mm_per_unit)
+
+    def margins(self, fill: Fill | None = None) -> np.ndarray:
+        """(m,) float: stability margin of each face, model units."""
+        return face_margins(self.polyhedron, self.mass_properties(fill).center)
+
+    def check_stable(self, min_margin: float = 0.0, fill: Fill | None = None) -> None:
+        """Raise :class:`DesignError` if the die cannot rest on some face."""
+        margins = self.margins(fill)
+        k = int(np.argmin(margins))
+        if margins[k] <= min_margin:
+            raise DesignError(
+                f"design {self.name!r} is unstable: the centre of mass projects "
+                f"{'outside' if margins[k] < 0 else 'onto the edge of'} face {self.polyhedron.names[k]} "
+                f"(margin {margins[k]:.4f}, need > {min_margin:g})"
+            )
+
+    def with_params(self, **params: float) -> Design:
+        """A copy with some parameters replaced."""
+        return replace(self, params={**self.params, **params})
+
+    def with_target(self, target: str) -> Design:
+        return replace(self, target=target)
+
+
+# ----------------------------------------------------------------------
+# templates and TOML
+
+
+def _templates_dir():
+    return resources.files("diefab.templates")
+
+
+def list_templates() -> list[Design]:
+    """Every shipped template, sorted by name."""
+    files = sorted(p for p in _templates_dir().iterdir() if p.name.endswith(".toml"))
+    return [parse_design(p.read_text(encoding="utf-8"), source=str(p)) for p in files]
+
+
+def template_path(name: str):
+    """The path of the shipped template called `name`."""
+    path = _templates_dir() / f"{name}.toml"
+    if not path.is_file():
+        known = ", ".join(sorted(p.name[:-5] for p in _templates_dir().iterdir() if p.name.endswith(".toml")))
+        raise DesignError(f"unknown template {name!r} (templates: {known}; or give a path to a .toml file)")
+    return path
+
+
+def load_design(spec: str | Path) -> Design:
+    """Load a design by template name or from a TOML file path."""
+    text = str(spec)
+    path = Path(text)
+    if text.endswith(".toml") or path.exists() or "/" in text or "\\" in text:
+        if not path.is_file():
+            raise DesignError(f"design file {text} does not exist")
+        try:
+            content = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise DesignError(f"cannot read design file {text}: {exc}") from exc
+        return parse_design(content, source=text, base=path.parent)
+    return parse_design(template_path(text).read_text(encoding="utf-8"), source=f"template {text}")
+
+
+def parse_design(content: str, *, source: str = "<string>", base: Path | None = None) -> Design:
+    """Parse a design from TOML text; errors name `source` and the line."""
+    try:
+        data = tomllib.loads(content)
+    except tomllib.TOMLDecodeError as exc:
+        raise DesignError(f"{source}: malformed TOML: {exc}") from exc
+    unknown = sorted(set(data) - _KEYS)
+    if unknown:
+        raise DesignError(f"{source}: unknown key {unknown[0]!r} (keys: {', '.join(sorted(_KEYS))})")
+    for key in ("name", "family"):
+        if key not in data:
+            raise DesignError(f"{source}: missing key {key!r}")
+    try:
+        fill = Fill(**data.get("fill", {}))
+    except TypeError as exc:
+        raise DesignError(f"{source}: [fill]: {exc}") from exc
+    kwargs = {
+        k: data[k] for k in ("name", "family", "params", "values", "target", "labels", "description") if k in data
+    }
+    if "size_mm" in data:
+        kwargs["size_mm"] = data["size_mm"]
+    if "vertices" in data:
+        kwargs["vertices"] = tuple(tuple(v) for v in data["vertices"])
+    if "faces" in data:
+        kwargs["faces"] = tuple(tuple(f) for f in data["faces"])
+    if "mesh" in data:
+        kwargs["mesh"] = (base or Path.cwd()) / data["mesh"]
+    try:
+        return Design(**kwargs, fill=fill, physics=data.get("physics", {}))
+    except DesignError as exc:
+        raise DesignError(f"{source}: {exc}") from exc
+    except (TypeError, ValueError) as exc:
+        raise DesignError(f"{source}: {exc}") from exc
+
+
+def design_to_toml(design: Design, *, comment: str = "") -> str:
+    """The design as a TOML template (round-trips through :func:`parse_design`)."""
+    import tomli_w
+
+    data: dict[str, Any] = {"name": design.name}
+    if design.description:
+        data["description"] = design.description
+    data["family"] = design.family
+    data["target"] = design.target
+    data["size_mm"] = float(design.size_mm)
+    if design.params:
+        data["params"] = {k: float(v) for k, v in design.params.items()}
+    if design.vertices is not None:
+        data["vertices"] = [list(map(float, v)) for v in design.vertices]
+    if design.faces is not None:
+        data["faces"] = [list(map(int, f)) for f in design.faces]
+    if design.mesh is not None:
+        data["mesh"] = str(design.mesh)
+    data["values"] = dict(design.values)
+    if design.labels:
+        data["labels"] = dict(design.labels)
+    data["fill"] = {"kind": design.fill.kind, "wall_mm": design.fill.wall_mm, "infill": design.fill.infill}
+    if design.physics:
+        data["physics"] = dict(design.physics)
+    header = "".join(f"# {line}\n" for line in comment.splitlines())
+    return header + tomli_w.dumps(data)

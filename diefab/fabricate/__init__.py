@@ -1,0 +1,1 @@
+"""Fabrication: paper nets (SVG/PDF) and printable solids (STL/3MF)."""

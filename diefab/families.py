@@ -1,0 +1,148 @@
+"""Parametric die families.
+
+A family turns a parameter mapping into a :class:`~diefab.geometry.Polyhedron`
+and knows its parameters' bounds and its reference length (what ``size_mm``
+measures).  ``gem`` is the paper's 9-faced gem; ``convex`` is any convex
+polyhedron given by its vertices (and optionally faces) in the design file;
+``mesh`` is a convex mesh file.
+
+Examples
+--------
+>>> poly = GEM.polyhedron({"a": 1.18, "b": 0.52, "c": 0.72, "d": 1.41})
+>>> poly.names
+('f1', 'f2', 'f3', 'f4', 'f5', 'f6', 'f7', 'f8', 'f9')
+>>> float(poly.vertices[8, 1])
+-1.41
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import DesignError, GeometryError
+from .geometry import Polyhedron
+
+__all__ = ["GEM", "Family", "Parameter", "family", "gem_center_of_mass_y", "gem_vertices"]
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """A bounded real parameter of a family."""
+
+    name: str
+    lower: float
+    upper: float
+    description: str
+    optional: bool = False
+
+    def check(self, value: float) -> float:
+        value = float(value)
+        if not np.isfinite(value):
+            raise DesignError(f"{self.name}={value} is not a finite number")
+        if not self.lower <= value <= self.upper:
+            raise DesignError(f"{self.name}={value:g} is outside [{self.lower:g}, {self.upper:g}]")
+        return value
+
+
+@dataclass(frozen=True)
+class Family:
+    """A named family of convex dice."""
+
+    name: str
+    parameters: tuple[Parameter, ...]
+    description: str
+
+    def check_params(self, params: Mapping[str, float]) -> dict[str, float]:
+        """Validated parameters: known names, all required present, within bounds."""
+        known = {p.name: p for p in self.parameters}
+        unknown = sorted(set(params) - set(known))
+        if unknown:
+            raise DesignError(
+                f"family {self.name!r} has no parameter {unknown[0]!r} (parameters: {', '.join(known) or 'none'})"
+            )
+        missing = [p.name for p in self.parameters if not p.optional and p.name not in params]
+        if missing:
+            raise DesignError(f"family {self.name!r} needs parameter {missing[0]!r}")
+        return {name: known[name].check(value) for name, value in params.items()}
+
+    def bounds(self, names: list[str]) -> np.ndarray:
+        """(k, 2) float: lower and upper bounds of the named parameters."""
+        known = {p.name: p for p in self.parameters}
+        return np.array([(known[n].lower, known[n].upper) for n in names])
+
+
+GEM = Family(
+    "gem",
+    (
+        Parameter("a", 1.0, 2.0, "aspect ratio: girdle half-length along x (the z half-length is 1)"),
+        Parameter("b", 0.3, 0.9, "top shrinkage: the top's z half-length"),
+        Parameter("c", 0.1, 1.0, "top height above the girdle"),
+        Parameter("d", 0.5, 4.0, "bottom depth: the apex is at y = -d"),
+        Parameter("e", 0.1, 2.0, "the top's x half-length (default a*b)", optional=True),
+    ),
+    "frustum of a pyramid on an inverted pyramid: 9 faces (the paper's 'gem')",
+)
+
+CONVEX = Family("convex", (), "any convex polyhedron given by its vertices")
+MESH = Family("mesh", (), "a convex mesh file (OBJ, STL, PLY)")
+
+_FAMILIES = {f.name: f for f in (GEM, CONVEX, MESH)}
+
+# Faces exactly as the paper lists them (1-based vertex numbers), outward CCW.
+_GEM_FACES = tuple(
+    np.array(f) - 1
+    for f in (
+        (5, 6, 2, 1),
+        (6, 7, 3, 2),
+        (7, 8, 4, 3),
+        (8, 5, 1, 4),
+        (8, 7, 6, 5),
+        (9, 1, 2),
+        (9, 2, 3),
+        (9, 3, 4),
+        (9, 4, 1),
+    )
+)
+
+
+def family(name: str) -> Family:
+    """The family called `name`."""
+    try:
+        return _FAMILIES[name]
+    except KeyError:
+        raise DesignError(f"unknown family {name!r} (known: {', '.join(_FAMILIES)})") from None
+
+
+def gem_vertices(a: float, b: float, c: float, d: float, e: float | None = None) -> np.ndarray:
+    """(9, 3) float: the paper's gem vertices v1..v9; `e` defaults to ``a * b``."""
+    e = a * b if e is None else e
+    return np.array(
+        [
+            (-a, 0, -1),
+            (a, 0, -1),
+            (a, 0, 1),
+            (-a, 0, 1),
+            (-e, c, -b),
+            (e, c, -b),
+            (e, c, b),
+            (-e, c, b),
+            (0, -d, 0),
+        ],
+        dtype=float,
+    )
+
+
+def gem_center_of_mass_y(a: float, b: float, c: float, d: float) -> float:
+    """The paper's Eq. (1): y of the solid gem's centre of mass (e = a*b)."""
+    return (c**2 * (3 * b**2 + 2 * b + 1) - d**2) / (4 * (c * (b**2 + b + 1) + d))
+
+
+def gem_polyhedron(params: Mapping[str, float]) -> Polyhedron:
+    """The gem for validated parameters."""
+    try:
+        return Polyhedron(gem_vertices(**params), _GEM_FACES)
+    except GeometryError as exc:
+        raise DesignError(f"gem parameters {dict(params)} do not give a convex die: {exc}") from exc

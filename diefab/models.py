@@ -1,0 +1,63 @@
+"""Landing-probability models.
+
+A model maps a polyhedron and its centre of mass to the probability of
+resting on each face.  ``solid-angle`` is the paper's: the solid angle each
+face subtends at the centre of mass, over 4 pi.  More models register
+themselves in :data:`MODELS`.
+
+Examples
+--------
+>>> from diefab.design import load_design
+>>> probs = value_probabilities(load_design("d6"), "solid-angle")
+>>> bool(np.allclose(probs, 1 / 6))
+True
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from .design import Design
+from .errors import DesignError
+from .geometry import Polyhedron, solid_angles
+from .mass import Fill
+
+__all__ = ["MODELS", "face_probabilities", "solid_angle_model", "to_values", "value_probabilities"]
+
+Model = Callable[[Polyhedron, np.ndarray], np.ndarray]
+
+
+def solid_angle_model(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
+    """(m,) float: solid angle of each face at `center` over 4 pi."""
+    omega = solid_angles(poly, center)
+    return omega / omega.sum()
+
+
+MODELS: dict[str, Model] = {"solid-angle": solid_angle_model}
+
+
+def _model(name: str) -> Model:
+    try:
+        return MODELS[name]
+    except KeyError:
+        raise DesignError(f"unknown model {name!r} (models: {', '.join(MODELS)})") from None
+
+
+def face_probabilities(design: Design, model: str = "solid-angle", fill: Fill | None = None) -> np.ndarray:
+    """(m,) float: probability of resting on each face, in face order."""
+    poly = design.polyhedron
+    return _model(model)(poly, design.mass_properties(fill).center)
+
+
+def to_values(design: Design, face_probs: np.ndarray) -> np.ndarray:
+    """Sum face probabilities (or counts) into the design's values, increasing."""
+    index = {v: i for i, v in enumerate(design.support)}
+    which = [index[design.values[n]] for n in design.polyhedron.names]
+    return np.bincount(which, weights=face_probs, minlength=len(index))
+
+
+def value_probabilities(design: Design, model: str = "solid-angle", fill: Fill | None = None) -> np.ndarray:
+    """(k,) float: probability of each value of ``design.support``."""
+    return to_values(design, face_probabilities(design, model, fill))

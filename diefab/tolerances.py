@@ -1,0 +1,19 @@
+"""Numerical tolerances, in one place.
+
+Model units are the paper's (the gem's girdle spans z in [-1, 1]); lengths
+below are in those units unless the name says otherwise.
+"""
+
+#: Largest distance of a face vertex from the face's best-fit plane.
+PLANARITY = 1e-9
+#: How far outside a face plane another vertex may lie and still count as convex.
+CONVEXITY = 1e-9
+#: Two unit normals closer than this (1 - cos) are taken as the same plane
+#: when coplanar triangles of a mesh are merged.
+COPLANAR = 1e-7
+#: Smallest face area, edge length and volume that are not degenerate.
+AREA = 1e-12
+LENGTH = 1e-9
+VOLUME = 1e-12
+#: Two face/up-direction cosines closer than this are a tie.
+TIE = 1e-9

@@ -1,0 +1,1 @@
+"""Shipped design templates (TOML files); installed as the package ``diefab.templates``."""
