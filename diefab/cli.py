@@ -7,6 +7,7 @@ Ctrl-C ends with status 130.  Outputs are written atomically.
 from __future__ import annotations
 
 import json
+import os
 import sys
 from pathlib import Path
 from typing import Any
@@ -16,6 +17,7 @@ import numpy as np
 
 from .design import Design, format_value, load_design
 from .errors import DiefabError
+from .files import atomic_write, ensure_dir
 
 # ----------------------------------------------------------------------
 # shared plumbing
@@ -274,6 +276,100 @@ def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, see
         )
 
 
+@cli.command()
+@design_argument
+@click.option("--model", default="solid-angle", show_default=True, help="Landing model to fit.")
+@click.option("--target", default=None, help="Target distribution (default: the design's).")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the random starts.")
+@click.option(
+    "--min-margin",
+    type=float,
+    default=0.05,
+    show_default=True,
+    help="Smallest stability margin of every face, model units (the girdle half-width is 1).",
+)
+@click.option("--starts", type=click.IntRange(0, 1000), default=6, show_default=True, help="Random starts.")
+@click.option(
+    "--free",
+    default=None,
+    metavar="A,B,...",
+    help="Parameters to optimize (default: all of the family's, e.g. a,b,c,d,e for the gem).",
+)
+@click.option("--objective", type=click.Choice(["eq2", "tvd", "jsd"]), default="eq2", show_default=True)
+@click.option("--name", default=None, help="Name of the optimized design (default DESIGN-MODEL-opt).")
+@out_option
+@json_option
+def optimize(design, params, model, target, seed, min_margin, starts, free, objective, name, out_dir, as_json) -> None:
+    """Fit DESIGN's parameters to its target; write the result as a template TOML."""
+    from .design import design_to_toml
+    from .families import family
+    from .optimize import optimize_design
+
+    d = get_design(design, params, target)
+    if not np.isfinite(min_margin) or min_margin < 0:
+        raise click.BadParameter(f"{min_margin} must be a non-negative number", param_hint="--min-margin")
+    names = None
+    if free is not None:
+        names = [n.strip() for n in free.split(",") if n.strip()]
+        known = [p.name for p in family(d.family).parameters]
+        bad = [n for n in names if n not in known]
+        if bad or not names:
+            raise click.BadParameter(
+                f"{free!r}: {bad[0] if bad else 'none'} is not a parameter of {d.family} ({','.join(known)})",
+                param_hint="--free",
+            )
+    ensure_dir(out_dir)
+    result = optimize_design(
+        d, model=model, objective=objective, names=names, min_margin=min_margin, starts=starts, seed=seed, name=name
+    )
+    best = result.design
+    path = atomic_write(
+        out_dir / f"{best.name}.toml",
+        design_to_toml(best, comment=f"Written by: diefab optimize {design} --model {model} --seed {seed}"),
+    )
+    goal = best.target_distribution.aligned(best.support)
+    margins = result.margins
+    report = {
+        "design": best.name,
+        "model": model,
+        "objective_name": objective,
+        "objective": result.objective,
+        "params": dict(best.params),
+        "values": values_dict(best, result.values),
+        "target_values": values_dict(best, goal),
+        "margins": dict(zip(best.polyhedron.names, margins.tolist())),
+        "min_margin": float(margins.min()),
+        "min_margin_mm": float(margins.min() * best.mm_per_unit),
+        "binding_face": result.binding_face,
+        "evaluations": result.evaluations,
+        "starts": result.starts,
+        "design_file": str(path),
+    }
+    if as_json:
+        emit_json(report)
+        return
+    con = _console()
+    con.print(
+        f"[bold]{best.name}[/bold]  "
+        + " ".join(f"{k}={v:.4f}" for k, v in best.params.items())
+        + f"\n{objective} = {result.objective:.5f} under the {model} model "
+        f"({result.evaluations} evaluations from {result.starts} starts)"
+    )
+    con.print(
+        "value      "
+        + " ".join(f"{v:>6d}" for v in best.support)
+        + "\nmodel x81  "
+        + " ".join(f"{81 * q:6.2f}" for q in result.values)
+        + "\ntarget x81 "
+        + " ".join(f"{81 * q:6.2f}" for q in goal)
+    )
+    con.print(
+        f"smallest stability margin {margins.min():.4f} ({margins.min() * best.mm_per_unit:.2f} mm at "
+        f"{best.size_mm:g} mm) on face {result.binding_face}; required {min_margin:g}"
+    )
+    con.print(f"wrote {path}")
+
+
 # ----------------------------------------------------------------------
 
 
@@ -295,4 +391,14 @@ def main(argv: list[str] | None = None) -> None:
     except DiefabError as exc:
         click.echo(f"diefab: error: {exc}".replace("\n", " "), err=True)
         sys.exit(2)
+    except Exception as exc:  # a bug, not bad input: one line unless asked for the traceback
+        if os.environ.get("DIEFAB_DEBUG"):
+            raise
+        click.echo(
+            f"diefab: internal error: {type(exc).__name__}: {exc} (set DIEFAB_DEBUG=1 for a traceback)".replace(
+                "\n", " "
+            ),
+            err=True,
+        )
+        sys.exit(1)
     sys.exit(rv if isinstance(rv, int) else 0)

@@ -8,7 +8,7 @@ polyhedron given by its vertices (and optionally faces) in the design file;
 
 Examples
 --------
->>> poly = GEM.polyhedron({"a": 1.18, "b": 0.52, "c": 0.72, "d": 1.41})
+>>> poly = gem_polyhedron(GEM.check_params({"a": 1.18, "b": 0.52, "c": 0.72, "d": 1.41}))
 >>> poly.names
 ('f1', 'f2', 'f3', 'f4', 'f5', 'f6', 'f7', 'f8', 'f9')
 >>> float(poly.vertices[8, 1])
@@ -17,7 +17,7 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,7 +25,7 @@ import numpy as np
 from .errors import DesignError, GeometryError
 from .geometry import Polyhedron
 
-__all__ = ["GEM", "Family", "Parameter", "family", "gem_center_of_mass_y", "gem_vertices"]
+__all__ = ["GEM", "Family", "Parameter", "family", "gem_center_of_mass_y", "gem_polyhedron", "gem_vertices"]
 
 
 @dataclass(frozen=True)
@@ -37,6 +37,8 @@ class Parameter:
     upper: float
     description: str
     optional: bool = False
+    #: Value of an optional parameter computed from the others when absent.
+    default: Callable[[Mapping[str, float]], float] | None = None
 
     def check(self, value: float) -> float:
         value = float(value)
@@ -68,6 +70,14 @@ class Family:
             raise DesignError(f"family {self.name!r} needs parameter {missing[0]!r}")
         return {name: known[name].check(value) for name, value in params.items()}
 
+    def complete(self, params: Mapping[str, float]) -> dict[str, float]:
+        """`params` with every absent optional parameter set to its default."""
+        out = dict(params)
+        for p in self.parameters:
+            if p.name not in out and p.default is not None:
+                out[p.name] = p.default(out)
+        return out
+
     def bounds(self, names: list[str]) -> np.ndarray:
         """(k, 2) float: lower and upper bounds of the named parameters."""
         known = {p.name: p for p in self.parameters}
@@ -81,7 +91,9 @@ GEM = Family(
         Parameter("b", 0.3, 0.9, "top shrinkage: the top's z half-length"),
         Parameter("c", 0.1, 1.0, "top height above the girdle"),
         Parameter("d", 0.5, 4.0, "bottom depth: the apex is at y = -d"),
-        Parameter("e", 0.1, 2.0, "the top's x half-length (default a*b)", optional=True),
+        Parameter(
+            "e", 0.1, 2.0, "the top's x half-length (default a*b)", optional=True, default=lambda p: p["a"] * p["b"]
+        ),
     ),
     "frustum of a pyramid on an inverted pyramid: 9 faces (the paper's 'gem')",
 )
@@ -140,9 +152,12 @@ def gem_center_of_mass_y(a: float, b: float, c: float, d: float) -> float:
     return (c**2 * (3 * b**2 + 2 * b + 1) - d**2) / (4 * (c * (b**2 + b + 1) + d))
 
 
+_GEM_TEMPLATE = Polyhedron(gem_vertices(1.5, 0.5, 0.5, 1.5), _GEM_FACES)
+
+
 def gem_polyhedron(params: Mapping[str, float]) -> Polyhedron:
     """The gem for validated parameters."""
     try:
-        return Polyhedron(gem_vertices(**params), _GEM_FACES)
+        return _GEM_TEMPLATE.with_vertices(gem_vertices(**params))
     except GeometryError as exc:
         raise DesignError(f"gem parameters {dict(params)} do not give a convex die: {exc}") from exc

@@ -151,8 +151,25 @@ class Polyhedron:
         return poly
 
     def with_vertices(self, vertices: np.ndarray) -> Polyhedron:
-        """The same topology and names on new vertex positions (validated)."""
-        return Polyhedron(vertices, self.faces, self.names)
+        """The same topology and names on new vertex positions (validated).
+
+        Cheaper than constructing anew: the combinatorial structure is
+        shared, only the geometry (planarity, convexity, degeneracy) is checked.
+        """
+        vertices = np.array(vertices, dtype=float)
+        if vertices.shape != self.vertices.shape:
+            raise GeometryError(f"need vertices of shape {self.vertices.shape}, got {vertices.shape}")
+        if not np.all(np.isfinite(vertices)):
+            raise GeometryError("vertices contain NaN or infinite coordinates")
+        vertices.setflags(write=False)
+        new = object.__new__(Polyhedron)
+        object.__setattr__(new, "vertices", vertices)
+        object.__setattr__(new, "faces", self.faces)
+        object.__setattr__(new, "names", self.names)
+        for key in _TOPOLOGY:
+            new.__dict__[key] = getattr(self, key)
+        new._validate()
+        return new
 
     def scaled(self, factor: float) -> Polyhedron:
         """A copy scaled about the origin."""
@@ -160,6 +177,19 @@ class Polyhedron:
 
     # ------------------------------------------------------------------
     # derived quantities
+    @cached_property
+    def _ring(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Every face's boundary as directed edges, face by face.
+
+        Returns ``(tail, head, face, start)``: vertex indices of each directed
+        edge, the face it bounds, and where each face's edges begin.
+        """
+        tail = np.concatenate(self.faces)
+        head = np.concatenate([np.roll(f, -1) for f in self.faces])
+        face = np.repeat(np.arange(len(self.faces)), [len(f) for f in self.faces])
+        start = np.concatenate([[0], np.cumsum([len(f) for f in self.faces])[:-1]])
+        return tail, head, face, start
+
     @cached_property
     def triangles(self) -> np.ndarray:
         """(t, 3) int: a fan triangulation of every face, outward oriented."""
@@ -173,11 +203,8 @@ class Polyhedron:
     @cached_property
     def _newell(self) -> np.ndarray:
         """(m, 3): twice the vector area of each face (Newell's method)."""
-        out = np.empty((len(self.faces), 3))
-        for k, f in enumerate(self.faces):
-            p = self.vertices[f]
-            out[k] = np.cross(p, np.roll(p, -1, axis=0)).sum(axis=0)
-        return out
+        tail, head, _, start = self._ring
+        return np.add.reduceat(_cross(self.vertices[tail], self.vertices[head]), start, axis=0)
 
     @cached_property
     def areas(self) -> np.ndarray:
@@ -192,13 +219,15 @@ class Polyhedron:
     @cached_property
     def offsets(self) -> np.ndarray:
         """(m,) float: plane offsets, ``normals[k] @ x == offsets[k]`` on face k."""
-        return np.array([self.normals[k] @ self.vertices[f].mean(axis=0) for k, f in enumerate(self.faces)])
+        tail, _, face, start = self._ring
+        mean = np.add.reduceat(self.vertices[tail], start, axis=0) / np.diff(np.append(start, len(tail)))[:, None]
+        return np.einsum("ij,ij->i", self.normals, mean)
 
     @cached_property
     def face_centroids(self) -> np.ndarray:
         """(m, 3) float: area centroids of the faces."""
         v = self.vertices[self.triangles]
-        tri_area = 0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1)
+        tri_area = 0.5 * np.linalg.norm(_cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1)
         weighted = np.zeros((len(self.faces), 3))
         np.add.at(weighted, self.triangle_face, tri_area[:, None] * v.mean(axis=1))
         return weighted / self.areas[:, None]
@@ -206,8 +235,8 @@ class Polyhedron:
     @cached_property
     def edges(self) -> np.ndarray:
         """(e, 2) int: undirected edges, each once, lower index first."""
-        directed = np.concatenate([np.column_stack([f, np.roll(f, -1)]) for f in self.faces])
-        return np.unique(np.sort(directed, axis=1), axis=0)
+        tail, head, _, _ = self._ring
+        return np.unique(np.sort(np.column_stack([tail, head]), axis=1), axis=0)
 
     @cached_property
     def edge_faces(self) -> np.ndarray:
@@ -216,17 +245,15 @@ class Polyhedron:
         Column 0 is the face that traverses the edge from lower to higher
         vertex index, column 1 the face on the other side.
         """
-        lookup = {}
-        for k, f in enumerate(self.faces):
-            for i, j in zip(f, np.roll(f, -1)):
-                lookup[int(i), int(j)] = k
+        tail, head, face, _ = self._ring
+        lookup = dict(zip(zip(tail.tolist(), head.tolist()), face.tolist()))
         return np.array([(lookup[int(i), int(j)], lookup[int(j), int(i)]) for i, j in self.edges], dtype=np.intp)
 
     @cached_property
     def volume(self) -> float:
         """Enclosed volume."""
         v = self.vertices[self.triangles]
-        return float(np.einsum("ij,ij->i", v[:, 0], np.cross(v[:, 1], v[:, 2])).sum() / 6)
+        return float(np.einsum("ij,ij->i", v[:, 0], _cross(v[:, 1], v[:, 2])).sum() / 6)
 
     @cached_property
     def surface_area(self) -> float:
@@ -236,7 +263,7 @@ class Polyhedron:
     def centroid(self) -> np.ndarray:
         """(3,) float: centre of mass of the uniform solid."""
         v = self.vertices[self.triangles]
-        six_vol = np.einsum("ij,ij->i", v[:, 0], np.cross(v[:, 1], v[:, 2]))
+        six_vol = np.einsum("ij,ij->i", v[:, 0], _cross(v[:, 1], v[:, 2]))
         return (six_vol[:, None] * v.sum(axis=1)).sum(axis=0) / (4 * six_vol.sum())
 
     # ------------------------------------------------------------------
@@ -260,26 +287,41 @@ class Polyhedron:
             k = int(np.argmin(self.areas))
             raise GeometryError(f"face {self.names[k]} is degenerate (area {self.areas[k]:.3g})")
         # closed, 2-manifold, consistently oriented: every directed edge once, with its reverse
-        directed = [(int(i), int(j)) for f in self.faces for i, j in zip(f, np.roll(f, -1))]
-        seen = set(directed)
-        if len(seen) != len(directed):
+        tail, head, face, _ = self._ring
+        n = len(self.vertices)
+        code, back = tail * n + head, head * n + tail
+        if len(np.unique(code)) != len(code):
             raise GeometryError("an edge is traversed twice in the same direction: faces are inconsistently oriented")
-        open_edges = [e for e in directed if (e[1], e[0]) not in seen]
-        if open_edges:
-            raise GeometryError(f"surface is not closed: edge {open_edges[0]} has only one face")
-        lengths = np.linalg.norm(np.diff(self.vertices[self.edges], axis=1)[:, 0], axis=1)
+        open_edges = ~np.isin(back, code)
+        if open_edges.any():
+            i = int(np.argmax(open_edges))
+            raise GeometryError(f"surface is not closed: edge {(int(tail[i]), int(head[i]))} has only one face")
+        lengths = np.linalg.norm(self.vertices[head] - self.vertices[tail], axis=1)
         if np.any(lengths <= tol.LENGTH * scale):
             raise GeometryError("an edge has zero length")
-        for k, f in enumerate(self.faces):
-            dist = self.vertices[f] @ self.normals[k] - self.offsets[k]
-            if np.abs(dist).max() > tol.PLANARITY * scale:
-                raise GeometryError(f"face {self.names[k]} is not planar (off by {np.abs(dist).max():.3g})")
+        dist = np.abs(np.einsum("ij,ij->i", self.vertices[tail], self.normals[face]) - self.offsets[face])
+        if dist.max() > tol.PLANARITY * scale:
+            k = int(face[np.argmax(dist)])
+            raise GeometryError(f"face {self.names[k]} is not planar (off by {dist.max():.3g})")
         if self.volume <= tol.VOLUME * scale**3:
             raise GeometryError("volume is not positive: the solid is flat or its faces are oriented inward")
         height = self.vertices @ self.normals.T - self.offsets
         if height.max() > tol.CONVEXITY * scale:
             v, k = np.unravel_index(np.argmax(height), height.shape)
             raise GeometryError(f"not convex: vertex {v} lies {height[v, k]:.3g} outside face {self.names[k]}")
+
+
+#: Cached properties that depend on the faces only, shared by :meth:`Polyhedron.with_vertices`.
+_TOPOLOGY = ("_ring", "triangles", "triangle_face", "edges", "edge_faces")
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross product of (k, 3) arrays (np.cross has a large fixed overhead)."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
 
 
 def _merge_coplanar(points: np.ndarray, simplices: np.ndarray, equations: np.ndarray) -> list[np.ndarray]:
@@ -341,7 +383,7 @@ def solid_angles(poly: Polyhedron, point: np.ndarray) -> np.ndarray:
     r = poly.vertices[poly.triangles] - np.asarray(point, dtype=float)
     a, b, c = r[:, 0], r[:, 1], r[:, 2]
     la, lb, lc = (np.linalg.norm(x, axis=1) for x in (a, b, c))
-    triple = np.einsum("ij,ij->i", a, np.cross(b, c))
+    triple = np.einsum("ij,ij->i", a, _cross(b, c))
     denom = (
         la * lb * lc
         + np.einsum("ij,ij->i", a, b) * lc
@@ -364,20 +406,18 @@ def face_margins(poly: Polyhedron, point: np.ndarray) -> np.ndarray:
     (m,) float, model units
     """
     point = np.asarray(point, dtype=float)
-    out = np.empty(len(poly.faces))
-    for k, f in enumerate(poly.faces):
-        n = poly.normals[k]
-        q = point - (point @ n - poly.offsets[k]) * n
-        p0 = poly.vertices[f]
-        p1 = np.roll(p0, -1, axis=0)
-        edge = p1 - p0
-        inward = np.cross(n, edge)
-        inward /= np.linalg.norm(inward, axis=1)[:, None]
-        line = np.einsum("ij,ij->i", q - p0, inward)
-        t = np.clip(np.einsum("ij,ij->i", q - p0, edge) / np.einsum("ij,ij->i", edge, edge), 0, 1)
-        seg = np.linalg.norm(p0 + t[:, None] * edge - q, axis=1).min()
-        out[k] = seg if line.min() >= 0 else -seg
-    return out
+    tail, head, face, start = poly._ring
+    n = poly.normals[face]
+    q = point - (n @ point - poly.offsets[face])[:, None] * n  # projection into each edge's face plane
+    p0, edge = poly.vertices[tail], poly.vertices[head] - poly.vertices[tail]
+    inward = _cross(n, edge)
+    inward /= np.linalg.norm(inward, axis=1)[:, None]
+    line = np.einsum("ij,ij->i", q - p0, inward)
+    t = np.clip(np.einsum("ij,ij->i", q - p0, edge) / np.einsum("ij,ij->i", edge, edge), 0, 1)
+    seg = np.linalg.norm(p0 + t[:, None] * edge - q, axis=1)
+    inside = np.minimum.reduceat(line, start) >= 0
+    distance = np.minimum.reduceat(seg, start)
+    return np.where(inside, distance, -distance)
 
 
 def up_faces(poly: Polyhedron) -> list[int | None]:

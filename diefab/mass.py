@@ -30,7 +30,7 @@ from typing import Literal
 import numpy as np
 
 from .errors import DesignError
-from .geometry import Polyhedron
+from .geometry import Polyhedron, _cross
 
 __all__ = ["Fill", "MassProperties", "inset", "mass_properties"]
 
@@ -80,7 +80,7 @@ class MassProperties:
 def _solid_moments(poly: Polyhedron) -> tuple[float, np.ndarray, np.ndarray]:
     """Volume, first moment and second moment ∫ x xᵀ dV of the solid."""
     v = poly.vertices[poly.triangles]  # tetrahedra (0, a, b, c)
-    det = np.einsum("ij,ij->i", v[:, 0], np.cross(v[:, 1], v[:, 2]))
+    det = np.einsum("ij,ij->i", v[:, 0], _cross(v[:, 1], v[:, 2]))
     volume = det.sum() / 6
     first = (det[:, None] * v.sum(axis=1)).sum(axis=0) / 24
     a = v.transpose(0, 2, 1)  # columns are the tetrahedron's vertices
@@ -91,7 +91,7 @@ def _solid_moments(poly: Polyhedron) -> tuple[float, np.ndarray, np.ndarray]:
 def _shell_moments(poly: Polyhedron) -> tuple[float, np.ndarray, np.ndarray]:
     """Area, first moment and second moment ∫ x xᵀ dA of the surface."""
     v = poly.vertices[poly.triangles]
-    area = 0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1)
+    area = 0.5 * np.linalg.norm(_cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1)
     s = v.sum(axis=1)
     first = (area[:, None] * s).sum(axis=0) / 3
     second = np.einsum("t,tki,tkj->ij", area, v, v) + np.einsum("t,ti,tj->ij", area, s, s)

@@ -17,3 +17,10 @@ LENGTH = 1e-9
 VOLUME = 1e-12
 #: Two face/up-direction cosines closer than this are a tie.
 TIE = 1e-9
+#: Distance (mm) within which a mesh vertex lies on a face plane of the die (STL flat faces).
+STL_PLANE_MM = 1e-6
+#: Largest relative difference between an STL's volume and uncut volume ∓ text area × depth.
+STL_VOLUME_REL = 0.005
+#: Paper nets (mm): two flat polygons overlapping by no more than this along
+#: some axis only touch (shared fold edges, tab bases, vertices).
+NET_OVERLAP_MM = 1e-6
