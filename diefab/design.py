@@ -126,7 +126,6 @@ class Design:
             if not isinstance(v, str):
                 raise DesignError(f"labels: label of face {k!r} must be a string")
         self.target_distribution  # noqa: B018 -- validate the target against the values now
-        self.label_of  # noqa: B018 -- and that every label has a face
 
     # ------------------------------------------------------------------
     @cached_property

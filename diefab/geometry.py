@@ -144,7 +144,13 @@ class Polyhedron:
         if len(mesh.vertices) < 4:
             raise GeometryError(f"mesh {path} has fewer than 4 vertices")
         poly = cls.from_points(mesh.vertices, strict=False)
-        if mesh.is_watertight and abs(mesh.volume) < poly.volume * (1 - 1e-6):
+        # A convex mesh is its own hull: the same surface area (and volume, when closed).
+        if abs(mesh.area - poly.surface_area) > tol.MESH_REL * poly.surface_area:
+            raise GeometryError(
+                f"mesh {path} is not a convex surface: "
+                f"area {mesh.area:.6g} differs from its hull's {poly.surface_area:.6g}"
+            )
+        if mesh.is_watertight and abs(abs(mesh.volume) - poly.volume) > tol.MESH_REL * poly.volume:
             raise GeometryError(
                 f"mesh {path} is not convex: volume {abs(mesh.volume):.6g} < hull volume {poly.volume:.6g}"
             )

@@ -29,6 +29,7 @@ __all__ = [
     "counts_from_rolls",
     "expected_jsd",
     "expected_tvd",
+    "expected_tvd_exact",
     "goodman_intervals",
     "goodness_of_fit",
     "jsd",
@@ -65,8 +66,24 @@ def jsd(p: np.ndarray, q: np.ndarray) -> float:
 
 
 def expected_tvd(k: int, n: int) -> float:
-    """Asymptotic mean TVD between a distribution and n samples of it: sqrt((k-1)/(2 pi n))."""
+    """The paper's asymptotic mean TVD of n samples: sqrt((k-1)/(2 pi n)).
+
+    Exact (asymptotically) for a uniform distribution over k values and an
+    upper bound for any other: see :func:`expected_tvd_exact`.
+    """
     return float(np.sqrt((k - 1) / (2 * np.pi * n)))
+
+
+def expected_tvd_exact(p: Sequence[float], n: int) -> float:
+    """Asymptotic mean TVD between `p` and the frequencies of n samples of it.
+
+    Each frequency is asymptotically normal with variance p(1-p)/n, and
+    E|X| = sigma sqrt(2/pi), so E TVD = sum sqrt(p (1-p) / (2 pi n)).  By
+    Cauchy--Schwarz this is at most the paper's sqrt((k-1)/(2 pi n)), with
+    equality for the uniform distribution.
+    """
+    p = np.asarray(p, dtype=float)
+    return float(np.sqrt(p * (1 - p) / (2 * np.pi * n)).sum())
 
 
 def expected_jsd(k: int, n: int) -> float:
@@ -92,22 +109,62 @@ def goodman_intervals(counts: Sequence[int], alpha: float = 0.05) -> np.ndarray:
     return np.column_stack([(a + 2 * x - half), (a + 2 * x + half)]) / (2 * (n + a))
 
 
-def chi2_power(p: Sequence[float], q: Sequence[float], n: int, alpha: float = 0.05) -> float:
+def chi2_power(
+    p: Sequence[float],
+    q: Sequence[float],
+    n: int,
+    alpha: float = 0.05,
+    *,
+    method: str = "noncentral",
+    samples: int = 20_000,
+    seed: int = 0,
+) -> float:
     """Power of Pearson's chi-square test of `p` at `n` rolls when the truth is `q`.
 
-    Uses the noncentral chi-square approximation with noncentrality
-    ``n * pearson_divergence(q, p)`` and ``k - 1`` degrees of freedom.
+    Parameters
+    ----------
+    method : {"noncentral", "monte-carlo"}
+        ``noncentral``: the asymptotic noncentral chi-square with
+        noncentrality ``n * pearson_divergence(q, p)`` and ``k - 1`` degrees
+        of freedom (fast; optimistic for small n).  ``monte-carlo``: the
+        fraction of `samples` multinomial(n, q) draws the test rejects.
     """
     from scipy.stats import chi2, ncx2
 
-    df = int(np.count_nonzero(np.asarray(p) > 0)) - 1
-    lam = n * pearson_divergence(q, p)
+    p, q = np.asarray(p, float), np.asarray(q, float)
+    live = p > 0
+    df = int(live.sum()) - 1
     crit = chi2.ppf(1 - alpha, df)
+    if method == "monte-carlo":
+        x = np.random.default_rng(seed).multinomial(n, q, size=samples)
+        if np.any(x[:, ~live] > 0):  # a value the null says is impossible: always rejected
+            rejected = np.any(x[:, ~live] > 0, axis=1)
+        else:
+            rejected = np.zeros(samples, dtype=bool)
+        rejected |= _chi2_stat(x[:, live], n * p[live]) > crit
+        return float(rejected.mean())
+    if method != "noncentral":
+        raise StatsError(f"unknown power method {method!r} (noncentral, monte-carlo)")
+    lam = n * pearson_divergence(q, p)
     return float(chi2.sf(crit, df)) if lam == 0 else float(ncx2.sf(crit, df, lam))
 
 
-def rolls_for_power(p: Sequence[float], q: Sequence[float], power: float = 0.8, alpha: float = 0.05) -> int | None:
-    """Fewest rolls at which the chi-square test detects `q` with the given power (None if q == p)."""
+def rolls_for_power(
+    p: Sequence[float],
+    q: Sequence[float],
+    power: float = 0.8,
+    alpha: float = 0.05,
+    *,
+    method: str = "noncentral",
+    samples: int = 20_000,
+    seed: int = 0,
+) -> int | None:
+    """Fewest rolls at which the chi-square test detects `q` with the given power (None if q == p).
+
+    The noncentral answer is exact for its approximation; the Monte-Carlo
+    one bisects on the simulated power with common random numbers, starting
+    from the noncentral estimate.
+    """
     from scipy.optimize import brentq
     from scipy.stats import chi2, ncx2
 
@@ -120,7 +177,20 @@ def rolls_for_power(p: Sequence[float], q: Sequence[float], power: float = 0.8, 
     while ncx2.sf(crit, df, hi) < power:
         hi *= 2
     lam = brentq(lambda x: ncx2.sf(crit, df, x) - power, 0.0, hi, xtol=1e-10)
-    return int(np.ceil(lam / delta))
+    n = int(np.ceil(lam / delta))
+    if method == "noncentral":
+        return n
+
+    def enough(m: int) -> bool:
+        return chi2_power(p, q, m, alpha, method="monte-carlo", samples=samples, seed=seed) >= power
+
+    lo, hi_n = max(1, n // 2), n
+    while not enough(hi_n):
+        lo, hi_n = hi_n, hi_n * 2
+    while hi_n - lo > 1:
+        mid = (lo + hi_n) // 2
+        lo, hi_n = (lo, mid) if enough(mid) else (mid, hi_n)
+    return hi_n
 
 
 @dataclass(frozen=True, eq=False)
@@ -156,6 +226,10 @@ class GoodnessOfFit:
     @property
     def expected_tvd(self) -> float:
         return expected_tvd(len(self.counts), self.n)
+
+    @property
+    def expected_tvd_exact(self) -> float:
+        return expected_tvd_exact(self.target, self.n)
 
     @property
     def expected_jsd(self) -> float:

@@ -17,6 +17,9 @@ LENGTH = 1e-9
 VOLUME = 1e-12
 #: Two face/up-direction cosines closer than this are a tie.
 TIE = 1e-9
+#: Relative difference in area or volume between a mesh and its convex hull
+#: below which the mesh counts as convex.
+MESH_REL = 1e-6
 #: Distance (mm) within which a mesh vertex lies on a face plane of the die (STL flat faces).
 STL_PLANE_MM = 1e-6
 #: Largest relative difference between an STL's volume and uncut volume ∓ text area × depth.

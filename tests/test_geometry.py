@@ -1,0 +1,177 @@
+"""Polyhedron construction, validation and the exact solid-angle model."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from diefab.errors import GeometryError
+from diefab.families import GEM, gem_polyhedron
+from diefab.geometry import Polyhedron, face_margins, solid_angles, up_faces
+
+CUBE = [[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
+OCTAHEDRON = [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]]
+PHI = (1 + 5**0.5) / 2
+ICOSAHEDRON = [p for a, b in itertools.product((-1, 1), (-PHI, PHI)) for p in ([0, a, b], [a, b, 0], [b, 0, a])]
+TETRAHEDRON = [[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]]
+DODECAHEDRON = (
+    [list(p) for p in itertools.product((-1, 1), repeat=3)]
+    + [[0, a / PHI, b * PHI] for a in (-1, 1) for b in (-1, 1)]
+    + [[a / PHI, b * PHI, 0] for a in (-1, 1) for b in (-1, 1)]
+    + [[a * PHI, 0, b / PHI] for a in (-1, 1) for b in (-1, 1)]
+)
+
+gem_params = st.fixed_dictionaries(
+    {name: st.floats(p.lower, p.upper) for name, p in zip("abcd", GEM.parameters, strict=False)}
+)
+
+
+@pytest.mark.parametrize(
+    ("points", "faces", "sides"),
+    [(TETRAHEDRON, 4, 3), (CUBE, 6, 4), (OCTAHEDRON, 8, 3), (DODECAHEDRON, 12, 5), (ICOSAHEDRON, 20, 3)],
+)
+def test_platonic_solids_are_uniform_under_solid_angles(points, faces, sides):
+    poly = Polyhedron.from_points(points)
+    assert len(poly.faces) == faces
+    assert {len(f) for f in poly.faces} == {sides}  # coplanar hull triangles merged
+    omega = solid_angles(poly, poly.centroid)
+    np.testing.assert_allclose(omega, 4 * np.pi / faces, rtol=1e-12)
+
+
+def test_cube_measures():
+    cube = Polyhedron.from_points(CUBE)
+    assert cube.volume == pytest.approx(8)
+    assert cube.surface_area == pytest.approx(24)
+    np.testing.assert_allclose(cube.centroid, 0, atol=1e-15)
+    assert len(cube.edges) == 12
+    # every edge joins two distinct faces whose normals are perpendicular
+    n = cube.normals[cube.edge_faces]
+    np.testing.assert_allclose(np.einsum("ij,ij->i", n[:, 0], n[:, 1]), 0, atol=1e-15)
+    np.testing.assert_allclose(face_margins(cube, cube.centroid), 1.0)
+
+
+def test_margin_sign_follows_projection():
+    cube = Polyhedron.from_points(CUBE)
+    # centre of mass shifted 1.5 along +x projects outside the four side faces, inside the +-x faces
+    margins = face_margins(cube, [1.5, 0, 0])
+    normals = cube.normals
+    side = np.abs(normals[:, 0]) < 0.5
+    np.testing.assert_allclose(margins[side], -0.5)
+    np.testing.assert_allclose(margins[~side], 1.0)
+
+
+def test_solid_angles_at_a_vertex_region_point_still_sum_to_4pi():
+    poly = Polyhedron.from_points(ICOSAHEDRON)
+    point = 0.9 * poly.vertices[0]
+    assert solid_angles(poly, point).sum() == pytest.approx(4 * np.pi, rel=1e-12)
+
+
+@settings(max_examples=200, deadline=None)
+@given(gem_params, st.floats(0, 1))
+def test_gem_solid_angle_probabilities_are_a_distribution(params, t):
+    poly = gem_polyhedron(params)
+    # any point inside: blend centroid and a vertex
+    point = (1 - 0.9 * t) * poly.centroid + 0.9 * t * poly.vertices[8]
+    omega = solid_angles(poly, point)
+    assert np.all(omega > 0)
+    assert omega.sum() == pytest.approx(4 * np.pi, rel=1e-10)
+
+
+@settings(max_examples=100, deadline=None)
+@given(gem_params)
+def test_gem_mirror_faces_get_equal_solid_angle(params):
+    poly = gem_polyhedron(params)
+    omega = solid_angles(poly, poly.centroid)
+    for a, b in [(0, 2), (1, 3), (5, 7), (6, 8)]:  # f1/f3, f2/f4, f6/f8, f7/f9
+        assert omega[a] == pytest.approx(omega[b], rel=1e-10)
+
+
+def test_gem_faces_follow_the_paper():
+    poly = gem_polyhedron({"a": 1.18, "b": 0.52, "c": 0.72, "d": 1.41})
+    assert poly.names == tuple(f"f{k}" for k in range(1, 10))
+    np.testing.assert_allclose(poly.normals[4], [0, 1, 0])  # f5 is the top
+    assert [len(f) for f in poly.faces] == [4, 4, 4, 4, 4, 3, 3, 3, 3]
+    assert np.all(poly.normals[5:, 1] < 0)  # f6..f9 face down
+
+
+def test_up_faces_of_the_gem():
+    poly = gem_polyhedron({"a": 1.18, "b": 0.52, "c": 0.72, "d": 1.41})
+    up = up_faces(poly)
+    assert up[6] == 3  # resting on f7 puts f4 up
+    assert up[4] is None  # resting on f5 puts the apex up
+    assert sorted(u for u in up if u is not None) == [0, 1, 2, 3, 5, 6, 7, 8]  # a bijection
+
+
+def test_up_faces_of_a_cube_are_opposite():
+    cube = Polyhedron.from_points(CUBE)
+    for k, u in enumerate(up_faces(cube)):
+        np.testing.assert_allclose(cube.normals[u], -cube.normals[k])
+
+
+@pytest.mark.parametrize(
+    ("vertices", "faces", "message"),
+    [
+        (CUBE, [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4]], "not closed"),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], [[0, 1, 2], [1, 3, 2], [0, 2, 1], [1, 2, 3]], None),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, np.nan]], [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]], "NaN"),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], [[0, 1, 2], [0, 3, 1], [1, 3, 2], [0, 2, 3]], "inward"),
+    ],
+)
+def test_invalid_polyhedra_are_rejected(vertices, faces, message):
+    with pytest.raises(GeometryError, match=message):
+        Polyhedron(np.array(vertices, dtype=float), faces)
+
+
+def test_non_convex_faces_are_rejected():
+    # a cube with one top vertex pushed down: the top quad is no longer planar
+    v = np.array(CUBE, dtype=float)
+    v[7, 2] = 0.5
+    cube = Polyhedron.from_points(CUBE)
+    with pytest.raises(GeometryError, match="planar"):
+        cube.with_vertices(v)
+    # a dent: a vertex moved inward past the neighbouring planes
+    poly = Polyhedron.from_points(OCTAHEDRON)
+    w = poly.vertices.copy()
+    w[0] *= -0.2
+    with pytest.raises(GeometryError, match="convex"):
+        Polyhedron(w, poly.faces)
+
+
+def test_points_not_in_convex_position_are_rejected():
+    with pytest.raises(GeometryError, match="not a vertex"):
+        Polyhedron.from_points([*CUBE, [0, 0, 0]])
+    with pytest.raises(GeometryError, match="degenerate|no volume"):
+        Polyhedron.from_points([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [2, 2, 0]])
+
+
+def test_from_mesh_merges_coplanar_triangles(tmp_path):
+    import trimesh
+
+    box = trimesh.creation.box(extents=(2, 3, 4)).subdivide()  # 4 triangles per original one
+    for ext in ("stl", "obj"):
+        path = tmp_path / f"box.{ext}"
+        box.export(path)
+        poly = Polyhedron.from_mesh(path)
+        assert len(poly.faces) == 6
+        assert poly.volume == pytest.approx(24)
+        assert sorted(len(f) for f in poly.faces) == [4] * 6
+
+
+def test_non_convex_mesh_is_rejected(tmp_path):
+    import trimesh
+
+    a = trimesh.creation.box(extents=(1, 1, 1))
+    b = trimesh.creation.box(extents=(1, 1, 1))
+    b.apply_translation([1.0, 1.0, 0])
+    path = tmp_path / "l.stl"
+    trimesh.util.concatenate([a, b]).export(path)  # two cubes touching along an edge: not convex
+    with pytest.raises(GeometryError):
+        Polyhedron.from_mesh(path)
+    path = tmp_path / "garbage.stl"
+    path.write_bytes(b"not a mesh")
+    with pytest.raises(GeometryError):
+        Polyhedron.from_mesh(path)
