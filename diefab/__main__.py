@@ -1,0 +1,5 @@
+"""python -m diefab: the command line."""
+
+from .cli import main
+
+main()

@@ -1,0 +1,248 @@
+"""Paper nets: lengths, areas, overlaps, tabs, pages, CLI errors."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import xml.etree.ElementTree as ET
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from diefab import Design, Polyhedron, load_design
+from diefab.cli import main
+from diefab.fabricate.net import design_net, render_net
+from diefab.fabricate.unfold import PAGES, parse_page, unfold
+
+SVG = "{http://www.w3.org/2000/svg}"
+OVERLAP_MM2 = 1e-6
+
+
+def random_design(n_points: int = 12, seed: int = 3) -> Design:
+    """A random convex polyhedron (20 triangles): too many spanning trees to enumerate."""
+    rng = np.random.default_rng(seed)
+    x = rng.normal(size=(n_points, 3))
+    x /= np.linalg.norm(x, axis=1)[:, None]
+    poly = Polyhedron.from_points(x)
+    vertices = tuple(tuple(map(float, v)) for v in poly.vertices)
+    faces = tuple(tuple(int(i) for i in f) for f in poly.faces)
+    values = {n: k + 1 for k, n in enumerate(poly.names)}
+    labels = {n: str(k + 1) for k, n in enumerate(poly.names)}
+    return Design(
+        "random", "convex", vertices=vertices, faces=faces, values=values, labels=labels,
+        target=f"uniform:{len(values)}", size_mm=40,
+    )  # fmt: skip
+
+
+DESIGNS = {name: load_design(name) for name in ("fudge-gem", "d6", "d8")}
+DESIGNS["random"] = random_design()
+
+
+@pytest.fixture(scope="module", params=sorted(DESIGNS))
+def made(request):
+    design = DESIGNS[request.param]
+    net = design_net(design)
+    svg = render_net(design, net, ("svg",))["svg"].decode()
+    return design, net, ET.fromstring(svg)
+
+
+def parse_points(text: str) -> np.ndarray:
+    return np.array([[float(v) for v in p.split(",")] for p in text.split()])
+
+
+def svg_polygons(root, group: str, attr: str) -> dict[str, list[np.ndarray]]:
+    g = root.find(f".//{SVG}g[@id='{group}']")
+    out: dict[str, list[np.ndarray]] = {}
+    for poly in g.iter(f"{SVG}polygon"):
+        out.setdefault(poly.get(attr), []).append(parse_points(poly.get("points")))
+    return out
+
+
+def test_svg_is_true_scale_mm(made):
+    design, net, root = made
+    w, h = root.get("width"), root.get("height")
+    assert w.endswith("mm") and h.endswith("mm")
+    assert root.get("viewBox").split() == ["0", "0", w[:-2], h[:-2]]
+    for group in ("cut", "fold", "tabs", "labels"):
+        assert root.find(f".//{SVG}g[@id='{group}']") is not None
+
+
+def test_edge_lengths_and_area_survive_unfolding(made):
+    design, net, root = made
+    poly, scale = design.polyhedron, design.mm_per_unit
+    faces = svg_polygons(root, "faces", "data-face")
+    assert sorted(faces) == sorted(poly.names)
+    total = 0.0
+    for k, name in enumerate(poly.names):
+        (flat,) = faces[name]
+        ring = poly.vertices[poly.faces[k]]
+        want = np.linalg.norm(np.roll(ring, -1, axis=0) - ring, axis=1) * scale
+        got = np.linalg.norm(np.roll(flat, -1, axis=0) - flat, axis=1)
+        np.testing.assert_allclose(got, want, atol=0.01)
+        x, y = flat.T
+        total += 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+    assert total == pytest.approx(poly.surface_area * scale**2, rel=1e-4)  # SVG keeps 0.1 µm
+
+
+def test_nothing_overlaps(made):
+    from shapely.geometry import Polygon
+
+    design, net, root = made
+    faces = [(net.face_page[k], Polygon(p)) for k, p in enumerate(net.faces)]
+    tabs = [(t.page, Polygon(t.polygon)) for t in net.tabs]
+    shapes = faces + tabs
+    for i in range(len(shapes)):
+        for j in range(i + 1, len(shapes)):
+            if shapes[i][0] == shapes[j][0]:
+                assert shapes[i][1].intersection(shapes[j][1]).area < OVERLAP_MM2, (i, j)
+
+
+def test_one_tab_per_cut_edge_and_folds_per_piece(made):
+    design, net, root = made
+    poly = design.polyhedron
+    tabs = svg_polygons(root, "tabs", "data-tab")
+    cut = set(range(len(poly.edges))) - set(net.fold_edges.tolist())
+    assert sorted(t.edge for t in net.tabs) == sorted(cut)
+    assert all(len(v) == 1 for v in tabs.values()) and len(tabs) == len(cut)
+    assert {t.label for t in net.tabs} == set(tabs)
+    for t in net.tabs:
+        assert t.face in poly.edge_faces[t.edge]
+    for piece in range(net.n_pieces):
+        members = set(np.flatnonzero(net.face_piece == piece).tolist())
+        folds = [e for e in net.fold_edges if set(poly.edge_faces[e].tolist()) <= members]
+        assert len(folds) == len(members) - 1
+    # every tab's letter is also printed on the face across its edge
+    labels = [t.text for t in root.find(f".//{SVG}g[@id='labels']").iter(f"{SVG}text")]
+    for t in net.tabs:
+        assert labels.count(t.label) >= 2
+
+
+def test_tabs_are_narrow_trapezoids(made):
+    design, net, root = made
+    for t in net.tabs:
+        base = np.linalg.norm(t.polygon[1] - t.polygon[0])
+        d = t.polygon[1] - t.polygon[0]
+        normal = np.array([-d[1], d[0]]) / base
+        width = np.abs((t.polygon[2:] - t.polygon[0]) @ normal).max()
+        assert width <= min(5.0, 0.5 * base) + 1e-9
+
+
+def test_face_texts_are_the_design_labels(made):
+    design, net, root = made
+    texts = [t.text for t in root.find(f".//{SVG}g[@id='labels']").iter(f"{SVG}text") if t.get("class") == "face"]
+    assert sorted(texts) == sorted(design.label_of.values())
+
+
+def test_fudge_gem_fits_one_a4_page():
+    net = design_net(load_design("fudge-gem"))
+    assert net.n_pages == 1 and net.n_pieces == 1
+    pw, ph = net.page.printable
+    pts = np.concatenate(list(net.faces) + [t.polygon for t in net.tabs])
+    assert pts.min() >= net.page.margin - 1e-9
+    assert pts[:, 0].max() <= net.page.margin + pw + 1e-9 and pts[:, 1].max() <= net.page.margin + ph + 1e-9
+
+
+def test_large_die_splits_into_pages():
+    design = load_design("fudge-gem")
+    net = design_net(design, size_mm=150)
+    assert net.n_pieces > 1
+    for piece in range(net.n_pieces):
+        members = np.flatnonzero(net.face_piece == piece)
+        assert len(set(net.face_page[members].tolist())) == 1
+
+
+def test_mirror_free_unfolding():
+    """Faces keep their orientation: counter-clockwise from outside reads clockwise in y-down page coordinates."""
+    net = design_net(load_design("d8"))
+    for p in net.faces:
+        x, y = p.T
+        assert np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)) < 0
+
+
+@pytest.mark.parametrize("page", ["A4", "Letter"])
+def test_pdf_page_size(page):
+    design = load_design("d6")
+    pdf = render_net(design, design_net(design, page=page), ("pdf",))["pdf"]
+    boxes = re.findall(rb"/MediaBox\s*\[\s*([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s*\]", pdf)
+    w, h = PAGES[page.upper()]
+    assert boxes
+    for box in boxes:
+        x0, y0, x1, y1 = map(float, box)
+        assert x1 - x0 == pytest.approx(w / 25.4 * 72, abs=0.01)
+        assert y1 - y0 == pytest.approx(h / 25.4 * 72, abs=0.01)
+
+
+def test_outputs_render(tmp_path):
+    design = load_design("fudge-gem")
+    out = render_net(design, design_net(design), ("svg", "pdf", "png"), face_names=True)
+    assert out["png"][:8] == b"\x89PNG\r\n\x1a\n"
+    (tmp_path / "n.svg").write_bytes(out["svg"])
+    (tmp_path / "n.pdf").write_bytes(out["pdf"])
+    if shutil.which("rsvg-convert"):
+        subprocess.run(["rsvg-convert", str(tmp_path / "n.svg"), "-o", str(tmp_path / "s.png")], check=True)
+        assert (tmp_path / "s.png").stat().st_size > 1000
+    if shutil.which("pdftoppm"):
+        subprocess.run(["pdftoppm", "-r", "30", "-png", str(tmp_path / "n.pdf"), str(tmp_path / "p")], check=True)
+        assert list(tmp_path.glob("p*.png"))
+
+
+def test_parse_page():
+    assert parse_page("a3").width == 297.0
+    assert parse_page("100x150").height == 150.0
+
+
+def test_cube_has_eleven_distinct_net_shapes_all_valid():
+    cube = load_design("d6").polyhedron
+    net = unfold(cube, 10.0)
+    assert net.search["spanning_trees"] == 384 and net.search["overlap_free"] == 384
+
+
+# ----------------------------------------------------------------------
+# command line
+
+
+def test_cli_writes_files(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["net", "d6", "--out", str(tmp_path), "--format", "svg,pdf", "--face-names"])
+    assert exc.value.code == 0
+    out = capsys.readouterr().out
+    assert (tmp_path / "d6-net.svg").is_file() and (tmp_path / "d6-net.pdf").is_file()
+    assert "16 mm die" in out
+
+
+@pytest.mark.parametrize(
+    "args, words",
+    [
+        (["--size", "400"], "largest size that fits is"),
+        (["--size", "0"], "positive"),
+        (["--size", "-3"], "positive"),
+        (["--page", "B5"], "page"),
+        (["--format", "svg,gif"], "format"),
+    ],
+)
+def test_cli_bad_input(tmp_path, capsys, args, words):
+    with pytest.raises(SystemExit) as exc:
+        main(["net", "fudge-gem", "--out", str(tmp_path / "o"), *args])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and words in err
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+
+
+def test_cli_unwritable_folder(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    with pytest.raises(SystemExit) as exc:
+        main(["net", "d6", "--out", str(blocker / "sub")])
+    assert exc.value.code == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_size_error_names_a_size_that_works():
+    design = load_design("fudge-gem")
+    with pytest.raises(ValueError, match="largest size") as exc:
+        design_net(design, size_mm=400)
+    largest = float(re.search(r"fits is ([\d.]+) mm", str(exc.value)).group(1))
+    assert design_net(replace(design, size_mm=largest)).n_pieces >= 1
