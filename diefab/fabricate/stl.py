@@ -1,0 +1,841 @@
+"""Printable solids: the die in millimetres with its values engraved, checked and measured.
+
+:func:`build_solid` makes the die with manifold3d, in millimetres, from the
+design's convex hull (optionally with rounded edges and corners), cuts (or
+raises) every label with one batched boolean, checks the result after each
+operation, verifies it with trimesh, and measures what the engraving and the
+print's infill do to the centre of mass and to the landing prediction.
+:func:`stl_bytes` and :func:`threemf_bytes` render the body; the CLI writes them.
+
+Placement rules
+---------------
+* **Where**: a label sits at the centre of the largest circle inscribed in
+  its face (shapely's ``polylabel``), after the face is shrunk by the margin;
+  where that circle can slide (a rectangle, a trapezoid) at the middle of its
+  track (the centroid of the centres within 10 % of the largest radius).
+* **Size**: as large as fits, its convex hull inside the shrunk face; by
+  default all value labels then take the smallest of those heights, so the
+  die's numbers match (a logo from the design's ``labels`` table keeps its
+  own).  The
+  margin is ``margin_mm`` plus ``depth · cot θ`` for the sharpest dihedral
+  angle θ at the face's edges, so the pocket never breaks through a
+  neighbouring face.
+* **Upright**: "up" in a face is the die's axis (+y, the gem's apex-to-top
+  axis, for the gem family; +z otherwise) projected into the face plane, so
+  every side label reads upright when the die is held axis vertical, top up.
+  A face nearly perpendicular to the axis (projection shorter than
+  ``AXIS_PROJECTION``, e.g. the gem's top) stands its text on its longest
+  edge, reading along it.
+
+Landing model of a rounded die
+------------------------------
+A rounded die can only rest on the flat parts of its faces; a die that lands
+on a rounded edge rolls off onto one of them.  The rounded die's prediction is
+the solid angle that each *flat* face polygon subtends at the centre of mass,
+normalised by their sum (the rounded zones' share is spread in proportion).
+Without rounding this is exactly the paper's solid-angle model.
+
+Examples
+--------
+>>> from diefab.design import load_design
+>>> solid = build_solid(load_design("d6").with_params(), size_mm=16)
+>>> solid.watertight, solid.bodies, solid.genus
+(True, 1, 0)
+>>> abs(solid.volume_mm3 - (16**3 - solid.engraved_area_mm2 * 0.6)) < 0.005 * 16**3
+True
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import zipfile
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from .. import tolerances as tol
+from ..design import Design
+from ..errors import FabricationError
+from ..geometry import Polyhedron, solid_angles
+from ..mass import Fill, inset
+from .text import Font, load_font, stroke_width, text_polygons, thin_fraction
+
+__all__ = [
+    "Label",
+    "Solid",
+    "bed_face",
+    "build_solid",
+    "cut_labels",
+    "flat_face_probabilities",
+    "mesh_moments",
+    "stl_bytes",
+    "threemf_bytes",
+]
+
+#: A face whose plane holds less than this much of the die's axis uses the longest-edge rule.
+AXIS_PROJECTION = 0.3
+#: Height above the face the cutter starts at, mm (avoids coplanar booleans).
+CUT_OVERSHOOT_MM = 0.2
+#: Largest depth as a fraction of the die's thinnest width.
+MAX_DEPTH_FRACTION = 0.1
+#: Segments of the spheres that round edges and corners.
+ROUND_SEGMENTS = 32
+#: Share of a label's area that may be thinner than --min-stroke before a warning.
+THIN_AREA_WARNING = 0.1
+
+
+@dataclass(frozen=True, eq=False)
+class Label:
+    """One label placed on a face.
+
+    Attributes
+    ----------
+    face : str
+    text : str
+    height_mm : float
+        Digit height of the text.
+    stroke_mm : float
+        Mean stroke width (:func:`~diefab.fabricate.text.stroke_width`).
+    thin_fraction : float
+        Share of the text area in strokes thinner than ``min_stroke``.
+    area_mm2 : float
+        Area of the text outline (shapely), the engraved volume is ``area · depth``.
+    center_mm : (3,) float
+        Centre of the text on the face.
+    centroid_mm : (3,) float
+        Area centroid of the text outline on the face.
+    baseline, up, normal : (3,) float
+        The face frame: reading direction, up, outward normal (baseline × up = normal).
+    origin_mm : (3,) float
+        Origin of the face coordinates of `outline`.
+    outline : shapely geometry
+        The text in face coordinates (x along `baseline`, y along `up`), mm.
+    """
+
+    face: str
+    text: str
+    height_mm: float
+    stroke_mm: float
+    thin_fraction: float
+    area_mm2: float
+    center_mm: np.ndarray
+    centroid_mm: np.ndarray
+    baseline: np.ndarray
+    up: np.ndarray
+    normal: np.ndarray
+    origin_mm: np.ndarray
+    outline: Any = field(repr=False)
+
+
+@dataclass(frozen=True, eq=False)
+class Solid:
+    """A checked, printable die body in millimetres, with its report.
+
+    Attributes
+    ----------
+    vertices : (n, 3) float, mm
+    triangles : (t, 3) int, outward (counter-clockwise seen from outside)
+    label_triangles : (t,) bool
+        Triangles made by the label cutters (walls and floors of the engraving).
+    labels : tuple of Label
+    report : dict
+        JSON-ready measurements (see :func:`build_solid`).
+    warnings : tuple of str
+    print_rotation : (3, 3) float
+        Rotation that puts the print's bed face down (see :func:`bed_face`);
+        the exporters write :attr:`print_vertices`.
+    """
+
+    design: Design
+    vertices: np.ndarray
+    triangles: np.ndarray
+    label_triangles: np.ndarray
+    labels: tuple[Label, ...]
+    report: dict[str, Any]
+    warnings: tuple[str, ...]
+    print_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
+
+    @property
+    def print_vertices(self) -> np.ndarray:
+        """(n, 3) float, mm: the body on the print bed (z >= 0, bed face at z = 0, centred in x and y)."""
+        v = self.vertices @ self.print_rotation.T
+        lo, hi = v.min(axis=0), v.max(axis=0)
+        return v - np.array([(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, lo[2]])
+
+    @property
+    def volume_mm3(self) -> float:
+        return self.report["volume_mm3"]
+
+    @property
+    def engraved_area_mm2(self) -> float:
+        return float(sum(label.area_mm2 for label in self.labels))
+
+    @property
+    def watertight(self) -> bool:
+        return self.report["watertight"]
+
+    @property
+    def bodies(self) -> int:
+        return self.report["bodies"]
+
+    @property
+    def genus(self) -> int:
+        return self.report["genus"]
+
+    def to_trimesh(self):
+        import trimesh
+
+        return trimesh.Trimesh(self.vertices, self.triangles, process=True)
+
+
+# ----------------------------------------------------------------------
+# small pure helpers
+
+
+def mesh_moments(vertices: np.ndarray, triangles: np.ndarray) -> tuple[float, np.ndarray]:
+    """Volume and first moment ∫ x dV of a closed, outward-oriented triangle mesh.
+
+    Returns
+    -------
+    volume : float
+    first : (3,) float
+        Divide by the volume for the centre of mass.
+    """
+    v = np.asarray(vertices, dtype=float)[np.asarray(triangles)]
+    det = np.einsum("ij,ij->i", v[:, 0], np.cross(v[:, 1], v[:, 2]))
+    return float(det.sum() / 6), (det[:, None] * v.sum(axis=1)).sum(axis=0) / 24
+
+
+def _polygon_solid_angle(points: np.ndarray, center: np.ndarray) -> float:
+    """Solid angle of a planar convex polygon (ordered ring, (k, 3)) seen from `center`."""
+    r = points - center
+    a = np.repeat(r[:1], len(r) - 2, axis=0)
+    b, c = r[1:-1], r[2:]
+    la, lb, lc = (np.linalg.norm(x, axis=1) for x in (a, b, c))
+    triple = np.einsum("ij,ij->i", a, np.cross(b, c))
+    denom = la * lb * lc + (a * b).sum(1) * lc + (a * c).sum(1) * lb + (b * c).sum(1) * la
+    return float(abs((2 * np.arctan2(triple, denom)).sum()))
+
+
+def flat_face_probabilities(flat_faces: list[np.ndarray | None], center: np.ndarray) -> np.ndarray:
+    """(m,) float: solid angle of each flat face polygon at `center`, normalised to sum 1.
+
+    `flat_faces` holds an ordered (k, 3) ring per face, or None where rounding
+    left no flat part (probability 0).
+    """
+    omega = np.array([0.0 if f is None else _polygon_solid_angle(f, center) for f in flat_faces])
+    return omega / omega.sum()
+
+
+def _check(manifold, what: str):
+    """Raise unless manifold3d reports success and a non-empty result."""
+    import manifold3d
+
+    status = manifold.status()
+    if status != manifold3d.Error.NoError:
+        raise FabricationError(f"manifold3d failed while {what}: {status.name}")
+    if manifold.is_empty():
+        raise FabricationError(f"manifold3d produced an empty solid while {what}")
+    return manifold
+
+
+def bed_face(poly: Polyhedron, overhang_deg: float = 45.0) -> int:
+    """The face to print on: least overhanging area, then the largest face.
+
+    With face k on the bed, a face whose outward normal is within
+    `overhang_deg` of straight down (other than face k) needs support; its
+    area counts as overhang.
+    """
+    limit = math.cos(math.radians(overhang_deg))
+    down = poly.normals @ poly.normals.T  # [k, j]: cos between face j's normal and "down" when k is on the bed
+    overhang = np.where((down > limit + tol.TIE) & ~np.eye(len(poly.faces), dtype=bool), poly.areas[None, :], 0.0)
+    cost = overhang.sum(axis=1)
+    best = np.flatnonzero(cost <= cost.min() + tol.AREA)
+    return int(best[np.argmax(poly.areas[best])])
+
+
+def _rotation_to_down(normal: np.ndarray) -> np.ndarray:
+    """(3, 3): the rotation taking unit vector `normal` to (0, 0, -1) (Rodrigues)."""
+    target = np.array([0.0, 0.0, -1.0])
+    axis = np.cross(normal, target)
+    s, c = np.linalg.norm(axis), float(normal @ target)
+    if s < 1e-12:
+        return np.eye(3) if c > 0 else np.diag([1.0, -1.0, -1.0])
+    k = axis / s
+    kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + s * kx + (1 - c) * kx @ kx
+
+
+def _axis(design: Design) -> np.ndarray:
+    return np.array([0.0, 1.0, 0.0]) if design.family == "gem" else np.array([0.0, 0.0, 1.0])
+
+
+def _min_width(poly: Polyhedron) -> float:
+    """Thinnest width of the solid between a face and the opposite support plane."""
+    heights = poly.offsets[:, None] - poly.normals @ poly.vertices.T
+    return float(heights.max(axis=1).min())
+
+
+def _max_cot_dihedral(poly: Polyhedron) -> np.ndarray:
+    """(m,) float: largest cot of the interior dihedral angle at each face's edges (0 if all obtuse)."""
+    out = np.zeros(len(poly.faces))
+    for f0, f1 in poly.edge_faces:
+        cos_interior = -float(poly.normals[f0] @ poly.normals[f1])
+        theta = math.acos(max(-1.0, min(1.0, cos_interior)))
+        cot = max(0.0, math.cos(theta) / max(math.sin(theta), 1e-12))
+        out[f0] = max(out[f0], cot)
+        out[f1] = max(out[f1], cot)
+    return out
+
+
+def _ring_order(points: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """Points of a convex planar polygon in counter-clockwise order seen from outside, collinear dropped."""
+    from scipy.spatial import ConvexHull
+
+    u = np.cross(normal, [1.0, 0.0, 0.0])
+    if np.linalg.norm(u) < 0.5:
+        u = np.cross(normal, [0.0, 1.0, 0.0])
+    u /= np.linalg.norm(u)
+    w = np.cross(normal, u)
+    hull = ConvexHull(np.column_stack([points @ u, points @ w]))
+    return points[hull.vertices]  # scipy orders 2D hull vertices counter-clockwise in (u, w)
+
+
+def _face_frame(ring: np.ndarray, normal: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Baseline direction u and up direction v of a face (u × v = outward normal)."""
+    up = axis - (axis @ normal) * normal
+    if np.linalg.norm(up) < AXIS_PROJECTION:
+        edges = np.roll(ring, -1, axis=0) - ring
+        k = int(np.argmax(np.linalg.norm(edges, axis=1)))
+        along = edges[k] / np.linalg.norm(edges[k])
+        up = np.cross(normal, along)  # points into the face from edge k (rings are CCW from outside)
+    up = up / np.linalg.norm(up)
+    return np.cross(up, normal), up
+
+
+# ----------------------------------------------------------------------
+# building
+
+
+def _hull(points_mm: np.ndarray):
+    import manifold3d
+
+    return _check(manifold3d.Manifold.hull_points(np.ascontiguousarray(points_mm, dtype=float)), "building the hull")
+
+
+def _rounded(poly: Polyhedron, scale: float, inset_mm: float, radius_mm: float, clip):
+    """The polyhedron shrunk by `inset_mm`, grown back by spheres of `radius_mm`, clipped by `clip`."""
+    import manifold3d
+
+    core = inset(poly, inset_mm / scale) if inset_mm > 0 else poly
+    if core is None:
+        return None
+    if radius_mm <= 0:
+        return _hull(core.vertices * scale)
+    # the sphere's polygon must cover the true sphere, so the flat faces land on the original planes
+    cover = radius_mm / math.cos(math.pi / ROUND_SEGMENTS) ** 2
+    sphere = manifold3d.Manifold.sphere(cover, ROUND_SEGMENTS).to_mesh64()
+    sphere_pts = np.asarray(sphere.vert_properties)[:, :3]
+    points = (core.vertices * scale)[:, None, :] + sphere_pts[None, :, :]
+    body = _hull(points.reshape(-1, 3))
+    return _check(body ^ clip, "clipping the rounded body to the face planes")
+
+
+def _flat_faces(poly: Polyhedron, scale: float, vertices: np.ndarray) -> list[np.ndarray | None]:
+    """The flat part of each face of a body (mm, ordered rings), None where nothing flat is left."""
+    dist = vertices @ poly.normals.T - poly.offsets * scale
+    eps = tol.STL_PLANE_MM
+    rings: list[np.ndarray | None] = []
+    for k in range(len(poly.faces)):
+        on = vertices[np.abs(dist[:, k]) < eps]
+        if len(on) < 3:
+            rings.append(None)
+            continue
+        try:
+            ring = _ring_order(on, poly.normals[k])
+        except Exception:  # collinear points: an edge, not a face
+            rings.append(None)
+            continue
+        area = 0.5 * np.linalg.norm(np.cross(ring - ring[0], np.roll(ring, -1, axis=0) - ring[0]).sum(axis=0))
+        rings.append(ring if area > tol.AREA * scale**2 else None)
+    return rings
+
+
+def _place_label(
+    face: str,
+    text: str,
+    ring: np.ndarray,
+    normal: np.ndarray,
+    axis: np.ndarray,
+    font: Font,
+    margin_mm: float,
+    min_height_mm: float,
+    min_stroke_mm: float,
+    max_height_mm: float = math.inf,
+) -> Label:
+    from shapely import affinity
+    from shapely.geometry import Polygon
+    from shapely.ops import polylabel
+
+    u, v = _face_frame(ring, normal, axis)
+    origin = ring.mean(axis=0)
+    face2d = Polygon(np.column_stack([(ring - origin) @ u, (ring - origin) @ v]))
+    inner = face2d.buffer(-margin_mm, join_style="mitre")
+    glyphs = text_polygons(text, font)
+    if inner.is_empty or inner.area <= 0:
+        raise FabricationError(
+            f"label {text!r} does not fit on face {face}: the face is narrower than twice the margin "
+            f"({margin_mm:.2f} mm); use a larger --size"
+        )
+    center = polylabel(inner, tolerance=0.01)
+    # the largest inscribed circle can slide (a trapezoid, a rectangle): take the middle of
+    # the centres within 10 % of the best radius, not polylabel's arbitrary pick among ties
+    radius = inner.exterior.distance(center)
+    near_best = inner.buffer(-0.9 * radius)
+    if not near_best.is_empty:
+        center = near_best.centroid
+    hull = glyphs.convex_hull
+    x0, y0, x1, y1 = inner.bounds
+    lo, hi = 0.0, 2 * max(x1 - x0, y1 - y0) / max(min(np.ptp(np.asarray(hull.exterior.coords), axis=0)), 1e-9)
+    for _ in range(40):
+        mid = 0.5 * (lo + hi)
+        placed = affinity.translate(affinity.scale(hull, mid, mid, origin=(0, 0)), center.x, center.y)
+        lo, hi = (mid, hi) if inner.contains(placed) else (lo, mid)
+    height = min(lo, max_height_mm)
+    if lo < min_height_mm:
+        raise FabricationError(
+            f"label {text!r} does not fit on face {face}: at most {lo:.2f} mm high, "
+            f"below the minimum text height {min_height_mm:g} mm (use a larger --size or a shorter label)"
+        )
+    outline = affinity.translate(affinity.scale(glyphs, height, height, origin=(0, 0)), center.x, center.y)
+    c2 = outline.centroid
+    return Label(
+        face=face,
+        text=text,
+        height_mm=float(height),
+        stroke_mm=float(stroke_width(glyphs) * height),
+        thin_fraction=thin_fraction(outline, min_stroke_mm),
+        area_mm2=float(outline.area),
+        center_mm=origin + center.x * u + center.y * v,
+        centroid_mm=origin + c2.x * u + c2.y * v,
+        baseline=u,
+        up=v,
+        normal=np.asarray(normal, dtype=float),
+        origin_mm=origin,
+        outline=outline,
+    )
+
+
+def _cutter(label: Label, depth_mm: float, emboss: bool):
+    """The label's prism: into the face (engrave) or out of it (emboss), manifold3d."""
+    import manifold3d
+
+    contours = []
+    for poly in getattr(label.outline, "geoms", [label.outline]):
+        contours.append(np.asarray(poly.exterior.coords)[:-1])
+        contours.extend(np.asarray(r.coords)[:-1] for r in poly.interiors)
+    section = manifold3d.CrossSection(contours, manifold3d.FillRule.EvenOdd)
+    prism = _check(manifold3d.Manifold.extrude(section, depth_mm + CUT_OVERSHOOT_MM), f"extruding label {label.face}")
+    # engrave: from `depth` below the face to just above it; emboss: from just below to `depth` above
+    prism = prism.translate((0.0, 0.0, -CUT_OVERSHOOT_MM if emboss else -depth_mm))
+    matrix = np.column_stack([label.baseline, label.up, label.normal, label.origin_mm])
+    return _check(prism.transform(matrix).as_original(), f"placing label {label.face}")
+
+
+def cut_labels(body, cutters: list, *, emboss: bool = False, batched: bool = True):
+    """Subtract (or add) the label prisms from `body`, checking manifold3d after every boolean.
+
+    ``batched`` makes one boolean of all labels (manifold3d's batch
+    boolean); otherwise each label is a separate boolean on the growing body,
+    the straightforward baseline.
+    """
+    import manifold3d
+
+    op = manifold3d.OpType.Add if emboss else manifold3d.OpType.Subtract
+    verb = "embossing" if emboss else "engraving"
+    if not cutters:
+        return body
+    if batched:
+        return _check(manifold3d.Manifold.batch_boolean([body, *cutters], op), f"{verb} the labels")
+    for k, cutter in enumerate(cutters):
+        body = _check(body + cutter if emboss else body - cutter, f"{verb} label {k + 1}")
+    return body
+
+
+def build_solid(
+    design: Design,
+    *,
+    size_mm: float | None = None,
+    depth_mm: float = 0.6,
+    font: Font | str | None = None,
+    round_mm: float = 0.0,
+    emboss: bool = False,
+    min_stroke_mm: float = 0.6,
+    min_text_height_mm: float = 2.0,
+    margin_mm: float = 1.0,
+    density_g_cm3: float = 1.24,
+    print_fill: Fill | None = None,
+    batched: bool = True,
+    bed: str | None = None,
+    uniform_height: bool = True,
+) -> Solid:
+    """The printable die: hull (rounded if asked), labels engraved or embossed, checked and measured.
+
+    Parameters
+    ----------
+    design : Design
+    size_mm : float, optional
+        Overrides ``design.size_mm`` (the length of 2 model units along z).
+    depth_mm : float
+        Engraving depth (embossing height), mm; below ``MAX_DEPTH_FRACTION``
+        of the die's thinnest width.
+    font : Font or path, optional
+        Default DejaVu Sans Bold.
+    round_mm : float
+        Radius of the edge and corner rounding, mm (0: sharp).
+    emboss : bool
+        Raise the labels instead of cutting them (the die then no longer
+        rests flat on labelled faces).
+    min_stroke_mm : float
+        Thinner strokes give a warning (what the printer's nozzle can draw).
+    min_text_height_mm : float
+        A label that fits only smaller than this is an error naming the face.
+    margin_mm : float
+        Free border between text and face edge (plus the depth allowance).
+    density_g_cm3 : float
+        Material density (PLA 1.24).
+    print_fill : Fill, optional
+        Walls and infill of the print; default the design's fill when it is a
+        ``print`` fill, else 1.2 mm walls with 15 % infill.
+    batched : bool
+        One batched boolean for all labels (see :func:`cut_labels`).
+    uniform_height : bool
+        Give every value label the height of the smallest one that fits, as
+        on commercial dice (labels set in the design's ``labels`` table, like
+        the gem's logo, keep their own fit); false sizes each to its face.
+    bed : str, optional
+        Face to print on (default :func:`bed_face`); the exported files are
+        rotated so it lies on the bed.
+
+    Returns
+    -------
+    Solid
+        ``report`` holds ``volume_mm3``, ``uncut_volume_mm3``,
+        ``engraved_volume_mm3`` (from manifold3d) and
+        ``expected_engraved_volume_mm3`` (text area × depth, shapely),
+        ``watertight``, ``winding_consistent``, ``bodies``, ``genus``,
+        ``mass_g`` / ``mass_solid_g``, centres of mass and their shifts in mm
+        (``com_shift_mm``: engraving; ``infill_com_shift_mm``: infill;
+        ``round_com_shift_mm``: rounding), ``labels``, per-value landing
+        predictions and their changes, and ``warnings``.
+
+    Raises
+    ------
+    FabricationError
+        Bad settings (depth, size, rounding, a label that does not fit, an
+        unreadable font) or a failed/unsound boolean.
+    """
+    import manifold3d  # noqa: F401 -- fail early with ImportError if missing
+
+    for name, value in (("size_mm", size_mm), ("depth_mm", depth_mm), ("round_mm", round_mm),
+                        ("min_stroke_mm", min_stroke_mm), ("min_text_height_mm", min_text_height_mm),
+                        ("margin_mm", margin_mm), ("density_g_cm3", density_g_cm3)):  # fmt: skip
+        if value is not None and not (isinstance(value, (int, float)) and math.isfinite(value)):
+            raise FabricationError(f"{name}={value!r} is not a finite number")
+    if size_mm is not None:
+        if size_mm <= 0:
+            raise FabricationError(f"size={size_mm:g} mm must be positive")
+        design = replace(design, size_mm=float(size_mm))
+    if depth_mm <= 0:
+        raise FabricationError(f"depth={depth_mm:g} mm must be positive")
+    if round_mm < 0:
+        raise FabricationError(f"round={round_mm:g} mm must be >= 0")
+    if density_g_cm3 <= 0:
+        raise FabricationError(f"density={density_g_cm3:g} g/cm³ must be positive")
+    if min_text_height_mm <= 0 or min_stroke_mm <= 0 or margin_mm < 0:
+        raise FabricationError("min-text-height and min-stroke must be positive and margin >= 0")
+    font = font if isinstance(font, Font) else load_font(font)
+    poly = design.polyhedron
+    scale = design.mm_per_unit
+    width = _min_width(poly) * scale
+    if depth_mm >= MAX_DEPTH_FRACTION * width:
+        raise FabricationError(
+            f"depth={depth_mm:g} mm is too deep for a die {width:.2f} mm thick at its thinnest "
+            f"(must be < {MAX_DEPTH_FRACTION:g} of it, {MAX_DEPTH_FRACTION * width:.2f} mm)"
+        )
+    if print_fill is None:
+        print_fill = design.fill if design.fill.kind == "print" else Fill("print")
+    elif print_fill.kind != "print":
+        raise FabricationError(f"print_fill must be a 'print' fill, got kind {print_fill.kind!r}")
+
+    try:
+        bed_index = bed_face(poly) if bed is None else poly.face_index(bed)
+    except Exception as exc:
+        raise FabricationError(f"bed face: {exc}") from exc
+    warnings: list[str] = []
+    sharp = _hull(poly.vertices * scale)
+    if round_mm > 0:
+        body = _rounded(poly, scale, round_mm, round_mm, sharp)
+        if body is None:
+            raise FabricationError(
+                f"round={round_mm:g} mm is too large: the die is {width:.2f} mm thick at its thinnest"
+            )
+    else:
+        body = sharp
+    body_mesh = body.to_mesh64()
+    body_vertices = np.asarray(body_mesh.vert_properties)[:, :3]
+    flat = _flat_faces(poly, scale, body_vertices)
+    for k, ring in enumerate(flat):
+        if ring is None:
+            warnings.append(f"face {poly.names[k]} has no flat part left after rounding: the die cannot rest on it")
+
+    # --- labels
+    axis = _axis(design)
+    cots = _max_cot_dihedral(poly)
+
+    def place(face: str, text: str, cap: float = math.inf) -> Label:
+        k = poly.face_index(face)
+        if flat[k] is None:
+            raise FabricationError(f"label {text!r} does not fit on face {face}: rounding left no flat part")
+        return _place_label(
+            face, text, flat[k], poly.normals[k], axis, font,
+            margin_mm + depth_mm * cots[k], min_text_height_mm, min_stroke_mm, cap,
+        )  # fmt: skip
+
+    fitted = {face: place(face, text) for face, text in design.label_of.items()}
+    values = [face for face in fitted if face not in design.labels]  # computed value labels, not logos
+    if uniform_height and values:
+        common = min(fitted[face].height_mm for face in values)
+        fitted.update({face: place(face, fitted[face].text, common) for face in values})
+    labels: list[Label] = []
+    for face, label in fitted.items():
+        text = label.text
+        if label.stroke_mm < min_stroke_mm:
+            warnings.append(
+                f"face {face} label {text!r}: strokes about {label.stroke_mm:.2f} mm wide, "
+                f"thinner than --min-stroke {min_stroke_mm:g} mm (use a larger --size)"
+            )
+        elif label.thin_fraction > THIN_AREA_WARNING:
+            warnings.append(
+                f"face {face} label {text!r}: {label.thin_fraction:.0%} of the text is thinner than "
+                f"--min-stroke {min_stroke_mm:g} mm"
+            )
+        labels.append(label)
+    cutters = [_cutter(label, depth_mm, emboss) for label in labels]
+    final = cut_labels(body, cutters, emboss=emboss, batched=batched)
+    if emboss:
+        warnings.append("embossed labels stand out of their faces: the die does not rest flat on them")
+
+    # --- checks
+    genus = int(final.genus())
+    bodies = len(final.decompose())
+    mesh = final.to_mesh64()
+    vertices = np.asarray(mesh.vert_properties)[:, :3].copy()
+    triangles = np.asarray(mesh.tri_verts, dtype=np.int64).copy()
+    run_ids = np.asarray(mesh.run_original_id)
+    run_tri = np.asarray(mesh.run_index) // 3
+    cutter_ids = {c.original_id() for c in cutters}
+    label_tri = np.zeros(len(triangles), dtype=bool)
+    for rid, start, stop in zip(run_ids, run_tri[:-1], run_tri[1:]):
+        label_tri[start:stop] = rid in cutter_ids
+    import trimesh
+
+    tm = trimesh.Trimesh(vertices, triangles, process=True)
+    watertight, winding = bool(tm.is_watertight), bool(tm.is_winding_consistent)
+    tm_bodies = int(tm.body_count)
+    if bodies != 1 or tm_bodies != 1:
+        raise FabricationError(f"the solid has {max(bodies, tm_bodies)} separate bodies, expected 1")
+    if genus != 0:
+        raise FabricationError(f"the solid has genus {genus}, expected 0 (a label cut a tunnel through the die)")
+    if not (watertight and winding):
+        raise FabricationError(
+            f"the solid is not sound: watertight={watertight}, winding consistent={winding} (trimesh)"
+        )
+    uncut_volume, uncut_first = mesh_moments(body_vertices, np.asarray(body_mesh.tri_verts))
+    volume, first = mesh_moments(vertices, triangles)
+    if volume <= 0:
+        raise FabricationError(f"the solid has non-positive volume {volume:.6g} mm³")
+    expected_cut = sum(label.area_mm2 for label in labels) * depth_mm
+    sign = 1 if emboss else -1
+    expected_volume = uncut_volume + sign * expected_cut
+    if abs(volume - expected_volume) > tol.STL_VOLUME_REL * expected_volume:
+        raise FabricationError(
+            f"volume {volume:.2f} mm³ differs from the expected {expected_volume:.2f} mm³ "
+            f"(uncut {uncut_volume:.2f} {'+' if emboss else '-'} text {expected_cut:.2f}) by more than "
+            f"{tol.STL_VOLUME_REL:.1%}"
+        )
+
+    # --- mass and balance
+    com_sharp = poly.centroid * scale
+    com_uncut = uncut_first / uncut_volume
+    com_solid = first / volume
+    core_inset = max(round_mm, print_fill.wall_mm)
+    core_radius = max(0.0, round_mm - print_fill.wall_mm)
+    core = _rounded(poly, scale, core_inset, core_radius, sharp)
+    if core is None:  # walls meet: the print is solid
+        core_volume, core_first = 0.0, np.zeros(3)
+    else:
+        core_mesh = core.to_mesh64()
+        core_volume, core_first = mesh_moments(np.asarray(core_mesh.vert_properties)[:, :3], core_mesh.tri_verts)
+    if not emboss and depth_mm > print_fill.wall_mm and core is not None:
+        warnings.append(
+            f"depth {depth_mm:g} mm exceeds the print's wall {print_fill.wall_mm:g} mm: the slicer adds walls "
+            "around the engraving, so the printed mass and centre of mass are approximate"
+        )
+    hollow = 1 - print_fill.infill
+    print_volume = volume - hollow * core_volume
+    com_print = (first - hollow * core_first) / print_volume
+
+    def model(center_mm: np.ndarray) -> np.ndarray:
+        if round_mm > 0:
+            return flat_face_probabilities(flat, center_mm)
+        omega = solid_angles(poly, center_mm / scale)
+        return omega / omega.sum()
+
+    from ..models import to_values
+
+    def per_value(center_mm: np.ndarray) -> dict[str, float]:
+        return {str(v): float(p) for v, p in zip(design.support, to_values(design, model(center_mm)))}
+
+    def sharp_per_value() -> dict[str, float]:
+        omega = solid_angles(poly, poly.centroid)
+        return {str(v): float(p) for v, p in zip(design.support, to_values(design, omega / omega.sum()))}
+
+    predictions = {"sharp": sharp_per_value()}
+    if round_mm > 0:
+        predictions["rounded"] = per_value(com_uncut)
+    predictions["engraved"] = per_value(com_solid)
+    predictions["printed"] = per_value(com_print)
+    before = predictions["rounded" if round_mm > 0 else "sharp"]
+
+    def change(a: dict[str, float], b: dict[str, float]) -> dict[str, float]:
+        return {k: b[k] - a[k] for k in a}
+
+    grams = density_g_cm3 / 1000.0
+    report: dict[str, Any] = {
+        "design": design.name,
+        "size_mm": float(design.size_mm),
+        "mm_per_unit": float(scale),
+        "depth_mm": float(depth_mm),
+        "emboss": bool(emboss),
+        "round_mm": float(round_mm),
+        "font": str(font.path),
+        "volume_mm3": float(volume),
+        "uncut_volume_mm3": float(uncut_volume),
+        "hull_volume_mm3": float(poly.volume * scale**3),
+        "engraved_volume_mm3": float(abs(uncut_volume - volume)),
+        "expected_engraved_volume_mm3": float(expected_cut),
+        "watertight": watertight,
+        "winding_consistent": winding,
+        "bodies": bodies,
+        "genus": genus,
+        "triangles": int(len(triangles)),
+        "density_g_cm3": float(density_g_cm3),
+        "fill": {"kind": "print", "wall_mm": print_fill.wall_mm, "infill": print_fill.infill},
+        "mass_g": float(print_volume * grams),
+        "mass_solid_g": float(volume * grams),
+        "center_of_mass_mm": {
+            "uncut": com_uncut.tolist(),
+            "engraved": com_solid.tolist(),
+            "printed": com_print.tolist(),
+        },
+        "com_shift_mm": (com_solid - com_uncut).tolist(),
+        "com_shift_norm_mm": float(np.linalg.norm(com_solid - com_uncut)),
+        "infill_com_shift_mm": (com_print - com_solid).tolist(),
+        "infill_com_shift_norm_mm": float(np.linalg.norm(com_print - com_solid)),
+        "labels": {label.face: label.text for label in labels},
+        "label_details": {
+            label.face: {
+                "text": label.text,
+                "height_mm": label.height_mm,
+                "stroke_mm": label.stroke_mm,
+                "thin_fraction": label.thin_fraction,
+                "area_mm2": label.area_mm2,
+                "center_mm": label.center_mm.tolist(),
+                "up": label.up.tolist(),
+            }
+            for label in labels
+        },
+        "landing_model": "solid-angle" if round_mm == 0 else "solid-angle of the flat faces",
+        "probabilities": predictions,
+        "probability_change": {
+            "engraving": change(before, predictions["engraved"]),
+            "infill": change(predictions["engraved"], predictions["printed"]),
+        },
+        "warnings": warnings,
+    }
+    if round_mm > 0:
+        report["round_com_shift_mm"] = (com_uncut - com_sharp).tolist()
+        report["probability_change"]["rounding"] = change(predictions["sharp"], predictions["rounded"])
+        report["flat_face_area_mm2"] = {
+            poly.names[k]: 0.0 if ring is None else _ring_area(ring) for k, ring in enumerate(flat)
+        }
+    report["bed_face"] = poly.names[bed_index]
+    return Solid(
+        design, vertices, triangles, label_tri, tuple(labels), report, tuple(warnings),
+        _rotation_to_down(poly.normals[bed_index]),
+    )  # fmt: skip
+
+
+def _ring_area(ring: np.ndarray) -> float:
+    return float(0.5 * np.linalg.norm(np.cross(ring, np.roll(ring, -1, axis=0)).sum(axis=0)))
+
+
+# ----------------------------------------------------------------------
+# exporters
+
+
+def stl_bytes(solid: Solid) -> bytes:
+    """Binary STL of the body, millimetres."""
+    tri = solid.print_vertices[solid.triangles]
+    normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
+    record = np.dtype([("normal", "<f4", 3), ("vertices", "<f4", (3, 3)), ("attr", "<u2")])
+    data = np.zeros(len(tri), dtype=record)
+    data["normal"] = normals
+    data["vertices"] = tri
+    header = f"diefab {solid.design.name} mm".encode("ascii", "replace")[:80].ljust(80, b" ")
+    return header + np.uint32(len(tri)).tobytes() + data.tobytes()
+
+
+_CONTENT_TYPES = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n'
+    '<Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types">'
+    '<Default Extension="rels" ContentType="application/vnd.openxmlformats-package.relationships+xml"/>'
+    '<Default Extension="model" ContentType="application/vnd.ms-package.3dmanufacturing-3dmodel+xml"/>'
+    "</Types>"
+)
+_RELS = (
+    '<?xml version="1.0" encoding="UTF-8"?>\n'
+    '<Relationships xmlns="http://schemas.openxmlformats.org/package/2006/relationships">'
+    '<Relationship Target="/3D/3dmodel.model" Id="rel0" '
+    'Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"/>'
+    "</Relationships>"
+)
+
+
+def threemf_bytes(solid: Solid) -> bytes:
+    """3MF package (core specification, unit millimetre) of the body."""
+    from xml.sax.saxutils import escape
+
+    verts = "".join(f'<vertex x="{x:.6f}" y="{y:.6f}" z="{z:.6f}"/>' for x, y, z in solid.print_vertices)
+    tris = "".join(f'<triangle v1="{a}" v2="{b}" v3="{c}"/>' for a, b, c in solid.triangles)
+    model = (
+        '<?xml version="1.0" encoding="UTF-8"?>\n'
+        '<model unit="millimeter" xml:lang="en-US" '
+        'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02">'
+        f'<metadata name="Title">{escape(solid.design.name)}</metadata>'
+        '<metadata name="Application">diefab</metadata>'
+        f'<resources><object id="1" type="model" name="{escape(solid.design.name)}">'
+        f"<mesh><vertices>{verts}</vertices><triangles>{tris}</triangles></mesh></object></resources>"
+        '<build><item objectid="1"/></build></model>'
+    )
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as zf:
+        zf.writestr("[Content_Types].xml", _CONTENT_TYPES)
+        zf.writestr("_rels/.rels", _RELS)
+        zf.writestr("3D/3dmodel.model", model)
+    return buf.getvalue()

@@ -1,0 +1,373 @@
+"""The printable solid: soundness, volumes, balance, labels, exporters, CLI and slicer."""
+
+from __future__ import annotations
+
+import io
+import math
+import shutil
+import subprocess
+import xml.etree.ElementTree as ET
+import zipfile
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from diefab.cli import main
+from diefab.design import load_design
+from diefab.errors import FabricationError
+from diefab.fabricate.stl import (
+    build_solid,
+    cut_labels,
+    flat_face_probabilities,
+    mesh_moments,
+    stl_bytes,
+    threemf_bytes,
+)
+from diefab.fabricate.text import MINUS, load_font, needs_underline, stroke_width, text_polygons
+from diefab.geometry import solid_angles
+from diefab.mass import Fill, inset, mass_properties
+
+
+@pytest.fixture(scope="module")
+def gem():
+    return load_design("fudge-gem")
+
+
+@pytest.fixture(scope="module")
+def gem_solid(gem):
+    return build_solid(gem, size_mm=30.0)
+
+
+def _load_stl(data: bytes):
+    import trimesh
+
+    return trimesh.load(io.BytesIO(data), file_type="stl", process=True)
+
+
+# ----------------------------------------------------------------------
+# soundness and volume
+
+
+def test_fudge_gem_stl_is_sound(gem_solid):
+    r = gem_solid.report
+    assert r["watertight"] and r["winding_consistent"]
+    assert r["bodies"] == 1 and r["genus"] == 0  # '4', 'd' have counters: pockets, not tunnels
+    mesh = _load_stl(stl_bytes(gem_solid))
+    assert mesh.is_watertight and mesh.is_winding_consistent and mesh.is_volume
+    assert mesh.body_count == 1
+    assert mesh.volume == pytest.approx(r["volume_mm3"], rel=1e-5)  # float32 STL
+
+
+def test_volume_is_hull_minus_text_area_times_depth(gem, gem_solid):
+    """Independent: polyhedron volume in mm³ minus Σ (area of the text at its height) × depth."""
+    font = load_font()
+    scale = 30.0 / 2
+    hull = gem.polyhedron.volume * scale**3
+    text_area = sum(text_polygons(label.text, font).area * label.height_mm**2 for label in gem_solid.labels)
+    expected = hull - text_area * 0.6
+    assert gem_solid.volume_mm3 == pytest.approx(expected, rel=0.005)
+    assert gem_solid.volume_mm3 < hull
+    assert text_area * 0.6 == pytest.approx(gem_solid.report["engraved_volume_mm3"], rel=1e-4)
+
+
+def test_labels_are_the_designs(gem, gem_solid):
+    assert gem_solid.report["labels"] == gem.label_of
+    assert gem_solid.report["labels"]["f5"] == "4dF"
+    assert all(t.startswith(("+", MINUS)) for f, t in gem.label_of.items() if f != "f5")
+
+
+def test_labels_are_upright_and_not_mirrored(gem, gem_solid):
+    axis = np.array([0.0, 1.0, 0.0])
+    for label in gem_solid.labels:
+        assert np.allclose(np.cross(label.baseline, label.up), label.normal, atol=1e-12)
+        assert abs(label.up @ label.normal) < 1e-12
+        if abs(label.normal @ axis) < 0.95:  # side faces: text up points to the die's top
+            assert label.up @ axis > 0.3
+
+
+def test_labels_fit_inside_their_faces(gem, gem_solid):
+    from shapely.geometry import Polygon
+
+    poly = gem.polyhedron
+    for label in gem_solid.labels:
+        ring = poly.vertices[poly.faces[poly.face_index(label.face)]] * 15.0
+        rel = ring - label.origin_mm
+        face = Polygon(np.column_stack([rel @ label.baseline, rel @ label.up]))
+        assert label.outline.within(face.buffer(-1.0))
+        assert label.height_mm >= 2.0
+
+
+# ----------------------------------------------------------------------
+# balance
+
+
+def test_com_shift_equals_removed_prisms(gem_solid):
+    """Each pocket is a right prism: area A_k, centroid c_k - (depth/2) n_k; the COM moves by exactly that."""
+    r = gem_solid.report
+    depth = r["depth_mm"]
+    com0 = np.array(r["center_of_mass_mm"]["uncut"])
+    v0 = r["uncut_volume_mm3"]
+    removed = [(label.area_mm2 * depth, label.centroid_mm - 0.5 * depth * label.normal) for label in gem_solid.labels]
+    vol = v0 - sum(v for v, _ in removed)
+    predicted = (v0 * com0 - sum(v * c for v, c in removed)) / vol - com0
+    assert np.allclose(r["com_shift_mm"], predicted, atol=1e-6)
+    assert np.linalg.norm(predicted) > 1e-3  # the test would notice a zero shift
+
+
+def test_uncut_com_is_the_solids_and_print_fill_matches_mass_module(gem):
+    bare = replace(gem, labels={f: "" for f in gem.label_of})
+    solid = build_solid(bare, size_mm=30.0)
+    assert solid.labels == ()
+    r = solid.report
+    assert np.allclose(r["center_of_mass_mm"]["uncut"], gem.polyhedron.centroid * 15.0, atol=1e-9)
+    assert r["com_shift_norm_mm"] == pytest.approx(0.0, abs=1e-9)
+    props = mass_properties(gem.polyhedron, Fill("print"), mm_per_unit=15.0)
+    assert np.allclose(r["center_of_mass_mm"]["printed"], props.center * 15.0, atol=1e-9)
+    assert r["mass_g"] == pytest.approx(props.mass * 15.0**3 * 1.24e-3, rel=1e-9)
+
+
+def test_probabilities_follow_the_shifted_com(gem, gem_solid):
+    from diefab.models import to_values
+
+    r = gem_solid.report
+    com = np.array(r["center_of_mass_mm"]["engraved"]) / 15.0
+    omega = solid_angles(gem.polyhedron, com)
+    expected = to_values(gem, omega / omega.sum())
+    got = np.array(list(r["probabilities"]["engraved"].values()))
+    assert np.allclose(got, expected, atol=1e-12)
+    for key in ("sharp", "engraved", "printed"):
+        assert sum(r["probabilities"][key].values()) == pytest.approx(1.0)
+    assert 0 < max(abs(x) for x in r["probability_change"]["engraving"].values()) < 1e-3
+
+
+def test_flat_face_model_is_the_solid_angle_model_on_a_sharp_die(gem):
+    poly = gem.polyhedron
+    rings = [poly.vertices[f] for f in poly.faces]
+    center = poly.centroid + np.array([0.01, -0.02, 0.03])
+    omega = solid_angles(poly, center)
+    assert np.allclose(flat_face_probabilities(rings, center), omega / omega.sum(), atol=1e-12)
+
+
+# ----------------------------------------------------------------------
+# rounding, embossing, batching
+
+
+def test_rounded_volume_follows_steiners_formula(gem):
+    """inset(P, r) ⊕ ball(r): V = V_Q + S_Q r + r² Σ_e L_e (π - θ_e) / 2 + 4/3 π r³."""
+    bare = replace(gem, labels={f: "" for f in gem.label_of})
+    r_mm = 2.0
+    solid = build_solid(bare, size_mm=30.0, round_mm=r_mm)
+    assert solid.watertight and solid.bodies == 1 and solid.genus == 0
+    core = inset(gem.polyhedron, r_mm / 15.0).scaled(15.0)
+    lengths = np.linalg.norm(np.diff(core.vertices[core.edges], axis=1)[:, 0], axis=1)
+    n0, n1 = core.normals[core.edge_faces[:, 0]], core.normals[core.edge_faces[:, 1]]
+    exterior = np.arccos(np.clip(np.einsum("ij,ij->i", n0, n1), -1, 1))  # π - interior dihedral
+    steiner = core.volume + core.surface_area * r_mm + r_mm**2 * (lengths * exterior).sum() / 2
+    steiner += 4 / 3 * math.pi * r_mm**3
+    assert solid.volume_mm3 == pytest.approx(steiner, rel=0.005)
+    assert solid.volume_mm3 < gem.polyhedron.volume * 15.0**3
+    rep = solid.report
+    assert rep["landing_model"] == "solid-angle of the flat faces"
+    assert sum(rep["probabilities"]["rounded"].values()) == pytest.approx(1.0)
+    assert max(abs(x) for x in rep["probability_change"]["rounding"].values()) > 1e-3
+
+
+def test_rounded_and_engraved_gem_is_sound(gem):
+    solid = build_solid(gem, size_mm=30.0, round_mm=1.5)
+    assert solid.watertight and solid.bodies == 1 and solid.genus == 0
+    r = solid.report
+    assert r["volume_mm3"] == pytest.approx(r["uncut_volume_mm3"] - r["expected_engraved_volume_mm3"], rel=1e-4)
+
+
+def test_emboss_adds_the_text_volume(gem):
+    solid = build_solid(gem, size_mm=30.0, emboss=True)
+    r = solid.report
+    assert r["genus"] == 0 and r["bodies"] == 1
+    assert r["volume_mm3"] == pytest.approx(r["uncut_volume_mm3"] + r["expected_engraved_volume_mm3"], rel=1e-4)
+    assert any("emboss" in w for w in solid.warnings)
+
+
+def test_batched_and_sequential_engraving_agree(gem_solid):
+    import manifold3d
+
+    from diefab.fabricate.stl import _cutter, _hull
+
+    body = _hull(gem_solid.design.polyhedron.vertices * 15.0)
+    cutters = [_cutter(label, 0.6, False) for label in gem_solid.labels]
+    one = cut_labels(body, cutters, batched=True)
+    many = cut_labels(body, cutters, batched=False)
+    assert one.status() == manifold3d.Error.NoError and many.status() == manifold3d.Error.NoError
+    assert one.volume() == pytest.approx(many.volume(), rel=1e-9)
+    assert one.volume() == pytest.approx(gem_solid.volume_mm3, rel=1e-9)
+
+
+def test_mesh_moments_of_a_box():
+    import trimesh
+
+    box = trimesh.creation.box(extents=(2, 3, 4), transform=trimesh.transformations.translation_matrix([1, 2, 3]))
+    volume, first = mesh_moments(box.vertices, box.faces)
+    assert volume == pytest.approx(24.0)
+    assert np.allclose(first / volume, [1, 2, 3])
+
+
+def test_print_orientation_rests_on_a_face(gem_solid):
+    v = gem_solid.print_vertices
+    assert v[:, 2].min() == pytest.approx(0.0, abs=1e-12)
+    poly = gem_solid.design.polyhedron
+    bed = poly.face_index(gem_solid.report["bed_face"])
+    down = gem_solid.print_rotation @ poly.normals[bed]
+    assert np.allclose(down, [0, 0, -1], atol=1e-12)
+    assert np.allclose(gem_solid.print_rotation @ gem_solid.print_rotation.T, np.eye(3), atol=1e-12)
+
+
+# ----------------------------------------------------------------------
+# text
+
+
+def test_text_readability_rules():
+    font = load_font()
+    assert needs_underline("6") and needs_underline("9") and needs_underline("+6") and needs_underline("66")
+    assert not needs_underline("8") and not needs_underline("69") and not needs_underline("−3")
+    six = text_polygons("6", font)
+    assert six.bounds[3] - six.bounds[1] > 1.2  # digit height 1 plus the bar below
+    assert text_polygons("-3", font).equals(text_polygons(MINUS + "3", font))
+    minus = text_polygons(MINUS, font)
+    plus = text_polygons("+", font)
+    assert minus.bounds[2] - minus.bounds[0] == pytest.approx(plus.bounds[2] - plus.bounds[0], rel=0.05)
+    zero = text_polygons("0", font)
+    assert len(zero.interiors) == 1 and 0.1 < stroke_width(zero) < 0.3
+
+
+def test_thin_strokes_warn(gem):
+    solid = build_solid(gem, size_mm=12.0)
+    assert any("thinner than --min-stroke" in w for w in solid.warnings)
+    assert solid.watertight and solid.genus == 0
+
+
+def test_3mf_package(gem_solid):
+    zf = zipfile.ZipFile(io.BytesIO(threemf_bytes(gem_solid)))
+    assert {"[Content_Types].xml", "_rels/.rels", "3D/3dmodel.model"} <= set(zf.namelist())
+    root = ET.fromstring(zf.read("3D/3dmodel.model"))
+    ns = {"m": "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"}
+    assert root.get("unit") == "millimeter"
+    verts = np.array([[float(v.get(k)) for k in "xyz"] for v in root.iterfind(".//m:vertex", ns)])
+    tris = np.array([[int(t.get(k)) for k in ("v1", "v2", "v3")] for t in root.iterfind(".//m:triangle", ns)])
+    volume, _ = mesh_moments(verts, tris)
+    assert volume == pytest.approx(gem_solid.volume_mm3, rel=1e-6)
+
+
+# ----------------------------------------------------------------------
+# bad input
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"size_mm": 0.0}, "size=0"),
+        ({"size_mm": -3.0}, "size=-3"),
+        ({"depth_mm": 3.0}, "too deep"),
+        ({"depth_mm": 0.0}, "depth=0"),
+        ({"size_mm": 8.0}, "does not fit on face f1"),
+        ({"round_mm": 40.0}, "too large"),
+        ({"font": "/nonexistent/font.ttf"}, "does not exist"),
+    ],
+)
+def test_bad_settings_raise(gem, kwargs, match):
+    with pytest.raises(FabricationError, match=match):
+        build_solid(gem, **kwargs)
+
+
+def _run(argv, capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    out, err = capsys.readouterr()
+    return exc.value.code, out, err
+
+
+def test_cli_writes_stl_and_3mf(tmp_path, capsys):
+    import json
+
+    code, out, err = _run(["stl", "fudge-gem", "--format", "stl,3mf", "--out", str(tmp_path), "--json"], capsys)
+    assert code == 0, err
+    report = json.loads(out)
+    for key in ("file", "volume_mm3", "watertight", "com_shift_mm", "labels", "mass_g"):
+        assert key in report
+    assert report["labels"]["f4"] == "+2"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["fudge-gem.3mf", "fudge-gem.stl"]
+    mesh = _load_stl((tmp_path / "fudge-gem.stl").read_bytes())
+    assert mesh.is_watertight and mesh.volume == pytest.approx(report["volume_mm3"], rel=1e-5)
+
+
+@pytest.mark.parametrize(
+    ("args", "match"),
+    [
+        (["--depth", "3"], "too deep"),
+        (["--size", "0"], "size=0"),
+        (["--size", "8"], "face f1"),
+        (["--format", "obj"], "--format"),
+        (["--infill", "1.5"], "infill"),
+    ],
+)
+def test_cli_bad_input(tmp_path, capsys, args, match):
+    out_dir = tmp_path / "out"
+    code, _, err = _run(["stl", "fudge-gem", "--out", str(out_dir), *args], capsys)
+    assert code == 2
+    assert len(err.strip().splitlines()) == 1 and match in err
+    assert not out_dir.exists() or not any(out_dir.iterdir())
+
+
+def test_cli_unreadable_font_and_unwritable_folder(tmp_path, capsys):
+    bad_font = tmp_path / "font.ttf"
+    bad_font.write_bytes(b"not a font")
+    out_dir = tmp_path / "out"
+    code, _, err = _run(["stl", "fudge-gem", "--font", str(bad_font), "--out", str(out_dir)], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "font" in err
+    assert not out_dir.exists() or not any(out_dir.iterdir())
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    code, _, err = _run(["stl", "fudge-gem", "--out", str(blocker / "sub")], capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert blocker.read_text() == "x"
+
+
+def test_cli_label_too_long_names_the_face(tmp_path, capsys):
+    text = (tmp_path / "long.toml").write_text(
+        'name = "long"\nfamily = "gem"\n[params]\na = 1.18\nb = 0.52\nc = 0.72\nd = 1.41\n'
+        "[values]\nf1 = 3\nf2 = 4\nf3 = -3\nf4 = -4\nf5 = 0\nf6 = 1\nf7 = 2\nf8 = -1\nf9 = -2\n"
+        '[labels]\nf5 = "Fudge dice are great fun"\n'
+    )
+    assert text > 0
+    code, _, err = _run(["stl", str(tmp_path / "long.toml"), "--out", str(tmp_path / "o")], capsys)
+    assert code == 2 and "face f5" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+
+
+# ----------------------------------------------------------------------
+# slicer
+
+
+@pytest.mark.skipif(shutil.which("prusa-slicer") is None, reason="prusa-slicer is not installed")
+def test_prusa_slicer_slices_without_repair(gem_solid, tmp_path):
+    stl = tmp_path / "fudge-gem.stl"
+    stl.write_bytes(stl_bytes(gem_solid))
+    info = subprocess.run(["prusa-slicer", "--info", str(stl)], capture_output=True, text=True, timeout=120)
+    text = info.stdout + info.stderr
+    assert info.returncode == 0
+    assert "manifold = yes" in text
+    for repaired in ("open_edges", "facets_removed", "facets_reversed", "backwards_edges", "edges_fixed"):
+        assert repaired not in text
+    assert "number_of_parts =  1" in text or "number_of_parts = 1" in text
+    gcode = tmp_path / "fudge-gem.gcode"
+    run = subprocess.run(
+        ["prusa-slicer", "--export-gcode", str(stl), "--output", str(gcode)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    log = "\n".join(
+        line for line in (run.stdout + run.stderr).splitlines() if "[trace]" not in line and "[debug]" not in line
+    )
+    assert run.returncode == 0, log
+    assert "repair" not in log.lower() and "warning" not in log.lower()
+    assert gcode.is_file() and gcode.stat().st_size > 10_000
