@@ -20,6 +20,7 @@ from .families import GEM, Family, Parameter, gem_center_of_mass_y, gem_vertices
 from .geometry import Polyhedron, face_margins, solid_angles, up_faces
 from .mass import Fill, MassProperties, mass_properties
 from .models import MODELS, face_probabilities, value_probabilities
+from .physics import PhysicsSettings, RollResult, simulate
 from .stats import GoodnessOfFit, goodness_of_fit, jsd, pearson_divergence, tvd
 from .targets import Target, parse_target
 
@@ -40,7 +41,9 @@ __all__ = [
     "OutputError",
     "Parameter",
     "PhysicsError",
+    "PhysicsSettings",
     "Polyhedron",
+    "RollResult",
     "StatsError",
     "Target",
     "TargetError",
@@ -57,6 +60,7 @@ __all__ = [
     "parse_design",
     "parse_target",
     "pearson_divergence",
+    "simulate",
     "solid_angles",
     "tvd",
     "up_faces",

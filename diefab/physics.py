@@ -1,0 +1,597 @@
+"""Physics validation: drop the die many times in pybullet and count the faces.
+
+The paper (§2 end, §3) checks its die by rigid-body simulation: the die starts
+about 5 units above the ground in a random orientation with a random spin,
+restitution 0.3, friction 0.8, and the face it comes to rest on is counted.
+:func:`simulate` does that in parallel worker processes (or on a Dask
+cluster), reproducibly: drop *i* draws its initial conditions from
+``SeedSequence(seed, spawn_key=(i,))``, so the same seed gives the same
+counts whatever the number of workers or batches.
+
+A drop ends on a face, **cocked** (at rest with no face within
+``face_tolerance`` degrees of straight down) or **unsettled** (still moving at
+``time_limit``); cocked and unsettled drops are reported, never assigned to a
+face.  The engine itself lives in :mod:`diefab.world`; see there for units
+(model units, gravity 9.81 units/s², unit density) and for the fast path's
+stopping rule.
+
+Examples
+--------
+>>> s = PhysicsSettings.from_mapping({"restitution": 0.5, "angular_velocity": [0, 20]})
+>>> s.restitution, s.friction, s.angular_velocity
+(0.5, 0.8, (0.0, 20.0))
+>>> PhysicsSettings(friction=-1)
+Traceback (most recent call last):
+...
+diefab.errors.PhysicsError: physics friction=-1.0 must be a finite number >= 0
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import asdict, dataclass, fields
+from typing import Any
+
+import numpy as np
+
+from .design import Design
+from .errors import DesignError, PhysicsError
+from .mass import Fill
+
+__all__ = [
+    "MAX_DROPS",
+    "DropOutcome",
+    "PhysicsSettings",
+    "RollResult",
+    "SimulationInterrupted",
+    "classify_pose",
+    "drop",
+    "plot_validation",
+    "shutdown_pool",
+    "simulate",
+]
+
+#: More drops than this in one call is taken as a typo.
+MAX_DROPS = 100_000_000
+
+
+def _check(name: str, value, ok: bool, expected: str) -> None:
+    if not ok:
+        raise PhysicsError(f"physics {name}={value!r} must be {expected}")
+
+
+def _finite(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+@dataclass(frozen=True)
+class PhysicsSettings:
+    """Settings of a simulated drop (model units, seconds, radians; tolerance in degrees).
+
+    Parameters
+    ----------
+    restitution : float
+        Coefficient of restitution of die and ground, in [0, 1] (paper: 0.3).
+    friction : float
+        Coulomb (lateral) friction of die and ground, >= 0 (paper: 0.8).
+    rolling_friction, spinning_friction : float
+        Bullet's rolling and spinning friction, >= 0.
+    time_step : float
+        Simulation step, seconds, in (0, 0.05].
+    solver_iterations : int
+        Constraint-solver iterations per step (Bullet's default 10).
+    collision_margin : float
+        Bullet's collision margin of the die, model units, in [0, 0.1].
+    gravity : float
+        Units/s² (the die is simulated in model units).
+    drop_height : float
+        Initial height of the centre of mass above the ground (paper: about 5).
+    height_jitter : float
+        The height is uniform in ``drop_height ± height_jitter``.
+    angular_velocity : (float, float)
+        Range of the initial spin, rad/s; uniform magnitude, uniform direction.
+    linear_velocity : (float, float)
+        Range of the initial horizontal speed, units/s; uniform heading.
+    still_speed, still_spin : float
+        A die is still when its speed (units/s) and spin (rad/s) are below these.
+    settle_time : float
+        A die still this long (s) with a face within ``face_tolerance`` of
+        straight down has landed on that face.
+    cocked_time : float
+        A die still this long (s) with no face down is cocked (a die
+        momentarily balanced on an edge can be still for a short while).
+    energy_fraction : float
+        Fast-path early stop: a die resting near face f has landed on f once
+        its kinetic energy plus potential energy above rest is below this
+        fraction of the energy needed to tip over f's lowest edge; 0 turns
+        the early stop off.  In [0, 1).
+    time_limit : float
+        A die still moving after this many seconds is unsettled.
+    face_tolerance : float
+        Degrees: a settled die lies on a face when that face's outward normal
+        is within this angle of straight down, otherwise it is cocked.
+    """
+
+    restitution: float = 0.3
+    friction: float = 0.8
+    rolling_friction: float = 0.0
+    spinning_friction: float = 0.0
+    time_step: float = 1.0 / 240.0
+    solver_iterations: int = 10
+    collision_margin: float = 0.001
+    gravity: float = 9.81
+    drop_height: float = 5.0
+    height_jitter: float = 0.5
+    angular_velocity: tuple[float, float] = (0.0, 10.0)
+    linear_velocity: tuple[float, float] = (0.0, 0.0)
+    still_speed: float = 0.02
+    still_spin: float = 0.05
+    settle_time: float = 0.1
+    cocked_time: float = 1.0
+    energy_fraction: float = 0.5
+    time_limit: float = 20.0
+    face_tolerance: float = 3.0
+
+    def __post_init__(self) -> None:
+        for name in ("angular_velocity", "linear_velocity"):
+            value = getattr(self, name)
+            if not isinstance(value, tuple):
+                try:
+                    value = tuple(value)
+                except TypeError:
+                    raise PhysicsError(f"physics {name}={value!r} must be a [min, max] pair") from None
+                object.__setattr__(self, name, value)
+            _check(name, list(value), len(value) == 2 and all(map(_finite, value)), "a [min, max] pair of numbers")
+            object.__setattr__(self, name, (float(value[0]), float(value[1])))
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name == "solver_iterations":
+                ok = isinstance(value, (int, np.integer)) and not isinstance(value, bool) and 1 <= value <= 1000
+                _check(f.name, value, ok, "an integer in [1, 1000]")
+                object.__setattr__(self, f.name, int(value))
+            elif not isinstance(value, tuple):
+                _check(f.name, value, _finite(value), "a finite number")
+                object.__setattr__(self, f.name, float(value))
+        c = _check
+        c("restitution", self.restitution, 0 <= self.restitution <= 1, "in [0, 1]")
+        for name in ("friction", "rolling_friction", "spinning_friction"):
+            c(name, getattr(self, name), getattr(self, name) >= 0, "a finite number >= 0")
+        c("time_step", self.time_step, 0 < self.time_step <= 0.05, "in (0, 0.05] seconds")
+        c("collision_margin", self.collision_margin, 0 <= self.collision_margin <= 0.1, "in [0, 0.1] model units")
+        c("gravity", self.gravity, 0 < self.gravity <= 1000, "in (0, 1000] units/s²")
+        c("drop_height", self.drop_height, 0 < self.drop_height <= 1000, "in (0, 1000] model units")
+        c("height_jitter", self.height_jitter, 0 <= self.height_jitter < self.drop_height, "in [0, drop_height)")
+        for name, top in (("angular_velocity", 1000.0), ("linear_velocity", 100.0)):
+            lo, hi = getattr(self, name)
+            c(name, [lo, hi], 0 <= lo <= hi <= top, f"a range [min, max] with 0 <= min <= max <= {top:g}")
+        c("still_speed", self.still_speed, self.still_speed > 0, "> 0 units/s")
+        c("still_spin", self.still_spin, self.still_spin > 0, "> 0 rad/s")
+        c("settle_time", self.settle_time, 0 <= self.settle_time <= 10, "in [0, 10] seconds")
+        c("cocked_time", self.cocked_time, self.settle_time <= self.cocked_time <= 60, "in [settle_time, 60] seconds")
+        c("energy_fraction", self.energy_fraction, 0 <= self.energy_fraction < 1, "in [0, 1)")
+        c("time_limit", self.time_limit, self.cocked_time < self.time_limit <= 600, "in (cocked_time, 600] seconds")
+        c("face_tolerance", self.face_tolerance, 0 < self.face_tolerance < 45, "in (0, 45) degrees")
+
+    @classmethod
+    def from_mapping(cls, mapping: Mapping[str, Any] | None, **overrides: Any) -> PhysicsSettings:
+        """Settings from a design's ``[physics]`` table, then `overrides` (None values are ignored)."""
+        data = dict(mapping or {})
+        data.update({k: v for k, v in overrides.items() if v is not None})
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise PhysicsError(f"unknown physics setting {unknown[0]!r} (settings: {', '.join(sorted(known))})")
+        return cls(**data)
+
+    def as_dict(self) -> dict[str, Any]:
+        """The settings as a plain mapping (ranges as lists), e.g. for JSON."""
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
+
+
+# ----------------------------------------------------------------------
+# results
+
+
+@dataclass(frozen=True, eq=False)
+class RollResult:
+    """Outcome of `n` simulated drops.
+
+    Attributes
+    ----------
+    faces : tuple of str
+        Face names, polyhedron order.
+    face_counts : (m,) int
+        Drops that came to rest on each face.
+    cocked, unsettled : int
+        Drops at rest on no face / still moving at the time limit.
+    outcomes : (n,) int8
+        Per drop: the face index, -1 cocked or -2 unsettled (drop *i* is
+        the same for the same seed whatever the workers).
+    seconds : float
+        Wall-clock time of the simulation.
+    settings : PhysicsSettings
+    seed : int
+    """
+
+    faces: tuple[str, ...]
+    face_counts: np.ndarray
+    cocked: int
+    unsettled: int
+    outcomes: np.ndarray
+    seconds: float
+    settings: PhysicsSettings
+    seed: int = 0
+
+    @property
+    def n(self) -> int:
+        """Drops simulated."""
+        return len(self.outcomes)
+
+    @property
+    def landed(self) -> int:
+        """Drops that came to rest on a face."""
+        return int(self.face_counts.sum())
+
+    @property
+    def drops_per_second(self) -> float:
+        return self.n / self.seconds if self.seconds > 0 else float("inf")
+
+    @property
+    def face_probabilities(self) -> np.ndarray:
+        """(m,) float: share of the landed drops on each face."""
+        return self.face_counts / max(self.landed, 1)
+
+    def value_counts(self, design: Design) -> np.ndarray:
+        """(k,) int: landed drops per value of ``design.support`` (increasing)."""
+        if tuple(design.polyhedron.names) != self.faces:
+            raise PhysicsError(f"design {design.name!r} has faces {design.polyhedron.names}, the result {self.faces}")
+        index = {v: i for i, v in enumerate(design.support)}
+        which = [index[design.values[name]] for name in self.faces]
+        return np.bincount(which, weights=self.face_counts, minlength=len(index)).astype(np.int64)
+
+    def value_probabilities(self, design: Design) -> np.ndarray:
+        """(k,) float: share of the landed drops on each value."""
+        return self.value_counts(design) / max(self.landed, 1)
+
+
+class SimulationInterrupted(KeyboardInterrupt):
+    """Ctrl-C during :func:`simulate`; `done` drops of `total` had finished."""
+
+    def __init__(self, done: int, total: int) -> None:
+        super().__init__(f"interrupted after {done} of {total} drops")
+        self.done, self.total = done, total
+
+
+# ----------------------------------------------------------------------
+# single drops, for tests and inspection
+
+
+@dataclass(frozen=True)
+class DropOutcome:
+    """One drop: ``face`` (name, or None when cocked/unsettled) and ``status``."""
+
+    face: str | None
+    status: str  # "face", "cocked" or "unsettled"
+
+
+def _body(design: Design, fill: Fill | None = None):
+    from .world import die_body
+
+    return die_body(design.polyhedron, design.mass_properties(fill))
+
+
+def _outcome(design: Design, code: int) -> DropOutcome:
+    from .world import COCKED
+
+    if code >= 0:
+        return DropOutcome(design.polyhedron.names[code], "face")
+    return DropOutcome(None, "cocked" if code == COCKED else "unsettled")
+
+
+def classify_pose(design: Design, rotation, *, tolerance: float = 3.0) -> str | None:
+    """The face lying on the ground when the die has orientation `rotation`, or None (cocked).
+
+    Parameters
+    ----------
+    rotation : (3, 3) float
+        Model coordinates -> world (z up).
+    tolerance : float
+        Degrees between the face's outward normal and straight down.
+    """
+    r = np.asarray(rotation, dtype=float)
+    if r.shape != (3, 3) or not np.allclose(r @ r.T, np.eye(3), atol=1e-9) or np.linalg.det(r) < 0:
+        raise PhysicsError(f"rotation must be a (3, 3) rotation matrix, got shape {r.shape}")
+    down = r.T @ np.array([0.0, 0.0, -1.0])
+    cos = design.polyhedron.normals @ down
+    k = int(np.argmax(cos))
+    return design.polyhedron.names[k] if cos[k] >= np.cos(np.radians(tolerance)) else None
+
+
+def drop(
+    design: Design,
+    rotation,
+    height: float,
+    *,
+    linear_velocity=(0.0, 0.0, 0.0),
+    angular_velocity=(0.0, 0.0, 0.0),
+    settings: PhysicsSettings | None = None,
+    plain: bool = False,
+) -> DropOutcome:
+    """Drop `design` once from explicit initial conditions.
+
+    Parameters
+    ----------
+    rotation : (3, 3) float
+        Initial orientation, model coordinates -> world (z up).
+    height : float
+        Initial height of the centre of mass, model units.
+    linear_velocity, angular_velocity : (3,) float
+        World frame, units/s and rad/s.
+    plain : bool
+        Use the straightforward reference loop instead of the fast path.
+    """
+    from scipy.spatial.transform import Rotation
+
+    from .world import World
+
+    settings = settings or PhysicsSettings.from_mapping(design.physics)
+    body = _body(design)
+    r = np.asarray(rotation, dtype=float)
+    if r.shape != (3, 3) or not np.allclose(r @ r.T, np.eye(3), atol=1e-9) or np.linalg.det(r) < 0:
+        raise PhysicsError(f"rotation must be a (3, 3) rotation matrix, got shape {r.shape}")
+    quat = Rotation.from_matrix(r @ body.rotation).as_quat()  # body (principal) frame -> world
+    state = np.array([0.0, 0.0, float(height), *quat, *linear_velocity, *angular_velocity], dtype=float)
+    world = World(body, settings, slots=1)
+    try:
+        code = world.run_plain(state[None])[0] if plain else world.run(state[None])[0]
+    finally:
+        world.close()
+    return _outcome(design, int(code))
+
+
+# ----------------------------------------------------------------------
+# the parallel run
+
+_POOL: Any = None
+_POOL_SIZE = 0
+_ATEXIT: list[bool] = []
+
+
+def _pool(workers: int):
+    """A reused pool of `workers` processes, each keeping one pybullet world."""
+    global _POOL, _POOL_SIZE
+    if _POOL is None or _POOL_SIZE != workers:
+        shutdown_pool()
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        from .world import ignore_sigint
+
+        # fork starts a worker in milliseconds and needs no `if __name__ == "__main__"` guard in the
+        # caller's script; the parent never holds a pybullet world the children would touch
+        method = "fork" if sys.platform == "linux" else "spawn"
+        _POOL = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method), initializer=ignore_sigint)
+        _POOL_SIZE = workers
+        if not _ATEXIT:
+            import atexit
+
+            atexit.register(shutdown_pool)  # before the interpreter tears down what the pool needs
+            _ATEXIT.append(True)
+    return _POOL
+
+
+def shutdown_pool(kill: bool = False) -> None:
+    """Stop the worker processes kept between calls of :func:`simulate`."""
+    global _POOL, _POOL_SIZE
+    if _POOL is not None:
+        if kill:  # the pool then fails its pending futures itself (cancelling them first races with that)
+            for proc in list((getattr(_POOL, "_processes", None) or {}).values()):
+                proc.terminate()
+            _POOL.shutdown(wait=True)
+        else:
+            _POOL.shutdown(wait=True, cancel_futures=True)
+        _POOL, _POOL_SIZE = None, 0
+
+
+def _batches(n: int, workers: int) -> list[tuple[int, int]]:
+    # small enough to balance the workers and move the progress bar, big enough to keep them busy
+    size = int(np.clip(n // (workers * 8), 64, 1024))
+    return [(start, min(start + size, n)) for start in range(0, n, size)]
+
+
+def _dask_client(scheduler):
+    try:
+        from distributed import Client
+    except ImportError as exc:
+        raise PhysicsError("--scheduler needs Dask: pip install 'dask[distributed]'") from exc
+    if isinstance(scheduler, Client):
+        return scheduler, False
+    try:
+        return Client(str(scheduler), timeout="3s"), True
+    except (OSError, TimeoutError, ValueError, TypeError) as exc:
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise PhysicsError(f"cannot reach Dask scheduler {scheduler!r}: {reason}") from None
+
+
+def _check_run(design: Design, n, seed, workers, settings: PhysicsSettings) -> int:
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= MAX_DROPS:
+        raise PhysicsError(f"n={n!r} drops must be an integer in [1, {MAX_DROPS}]")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise PhysicsError(f"seed={seed!r} must be an integer >= 0")
+    if workers is None:
+        workers = os.cpu_count() or 1
+    if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or not 1 <= workers <= 1024:
+        raise PhysicsError(f"workers={workers!r} must be an integer in [1, 1024]")
+    try:
+        design.check_stable(0.0)
+    except DesignError as exc:
+        raise PhysicsError(str(exc)) from None
+    return int(workers)
+
+
+def simulate(
+    design: Design,
+    n: int,
+    *,
+    seed: int = 0,
+    workers: int | None = None,
+    settings: PhysicsSettings | None = None,
+    scheduler=None,
+    progress: Callable[[int, int], None] | None = None,
+) -> RollResult:
+    """Drop `design` `n` times and count the faces it comes to rest on.
+
+    Parameters
+    ----------
+    design : Design
+        Simulated with its fill's mass properties, in model units.
+    n : int
+        Number of drops.
+    seed : int
+        Drop *i* uses ``SeedSequence(seed, spawn_key=(i,))``: the same seed gives
+        the same outcomes whatever `workers`, `scheduler` or batching
+        (common random numbers for comparing designs).
+    workers : int, optional
+        Worker processes (default: all cores); 1 runs in this process.  The
+        pool is kept for the next call.
+    settings : PhysicsSettings, optional
+        Default: the design's ``[physics]`` table over the paper's defaults.
+    scheduler : str or distributed.Client, optional
+        Run the batches on this Dask cluster instead of local processes.
+    progress : callable(done, total), optional
+        Called as batches finish.
+
+    Raises
+    ------
+    PhysicsError
+        Bad `n`, `seed`, `workers` or settings, an unstable design, a die
+        that would start inside the ground, an unreachable scheduler.
+    SimulationInterrupted
+        On Ctrl-C, with the number of drops that had finished.
+    """
+    from concurrent.futures.process import BrokenProcessPool
+
+    from .world import COCKED, UNSETTLED, run_batch
+
+    settings = settings or PhysicsSettings.from_mapping(design.physics)
+    workers = _check_run(design, n, seed, workers, settings)
+    body = _body(design)
+    if settings.drop_height - settings.height_jitter <= body.radius:
+        raise PhysicsError(
+            f"physics drop_height={settings.drop_height:g} - height_jitter={settings.height_jitter:g} "
+            f"must exceed the die's radius {body.radius:.3f} so that it starts above the ground"
+        )
+    n, seed = int(n), int(seed)
+    outcomes = np.empty(n, dtype=np.int8)
+    batches = _batches(n, 1 if scheduler is None and workers == 1 else workers)
+    done = 0
+    started = time.perf_counter()
+
+    def finished(start: int, stop: int, codes: np.ndarray) -> None:
+        nonlocal done
+        outcomes[start:stop] = codes
+        done += stop - start
+        if progress is not None:
+            progress(done, n)
+
+    try:
+        if scheduler is not None:
+            from distributed import as_completed
+
+            client, own = _dask_client(scheduler)
+            try:
+                futures = client.map(run_batch, [body] * len(batches), [settings] * len(batches), [seed] * len(batches),
+                                     [a for a, _ in batches], [b for _, b in batches], pure=False)  # fmt: skip
+                where = {f.key: batch for f, batch in zip(futures, batches)}
+                try:
+                    for future in as_completed(futures):
+                        finished(*where[future.key], future.result())
+                except BaseException:
+                    client.cancel(futures)
+                    raise
+            finally:
+                if own:
+                    client.close()
+        elif workers == 1:
+            for start, stop in batches:
+                finished(start, stop, run_batch(body, settings, seed, start, stop))
+        else:
+            from concurrent.futures import FIRST_COMPLETED, wait
+
+            pool = _pool(workers)
+            pending = {pool.submit(run_batch, body, settings, seed, a, b): (a, b) for a, b in batches}
+            while pending:
+                ready, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for future in ready:
+                    finished(*pending.pop(future), future.result())
+    except KeyboardInterrupt:
+        if scheduler is None and workers > 1:
+            shutdown_pool(kill=True)
+        raise SimulationInterrupted(done, n) from None
+    except BrokenProcessPool as exc:
+        shutdown_pool(kill=True)
+        raise PhysicsError(f"a simulation worker process died ({exc}); {done} of {n} drops had finished") from None
+    seconds = time.perf_counter() - started
+    face_counts = np.bincount(outcomes[outcomes >= 0], minlength=len(design.polyhedron.faces))
+    return RollResult(
+        faces=tuple(design.polyhedron.names),
+        face_counts=face_counts.astype(np.int64),
+        cocked=int(np.count_nonzero(outcomes == COCKED)),
+        unsettled=int(np.count_nonzero(outcomes == UNSETTLED)),
+        outcomes=outcomes,
+        seconds=seconds,
+        settings=settings,
+        seed=seed,
+    )
+
+
+# ----------------------------------------------------------------------
+# the chart
+
+
+def plot_validation(design: Design, result: RollResult, *, fmt: str = "png", alpha: float = 0.05) -> bytes:
+    """Bar chart of simulated value probabilities (with simultaneous CIs), target and solid-angle model.
+
+    Returns the image as bytes (`fmt` ``png`` or ``svg``); the caller writes it.
+    """
+    import io
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    from .models import value_probabilities
+    from .stats import goodman_intervals
+
+    if fmt not in ("png", "svg"):
+        raise PhysicsError(f"plot format {fmt!r} must be png or svg")
+    values = design.support
+    counts = result.value_counts(design)
+    sim = counts / max(counts.sum(), 1)
+    ci = goodman_intervals(counts, alpha) if counts.sum() else np.zeros((len(values), 2))
+    target = design.target_distribution.aligned(values)
+    model = value_probabilities(design, "solid-angle")
+    x = np.arange(len(values))
+    fig = Figure(figsize=(7.5, 4.2), dpi=120)
+    ax = fig.add_subplot()
+    w = 0.27
+    ax.bar(x - w, sim, w, yerr=[sim - ci[:, 0], ci[:, 1] - sim], capsize=3, color="#3b75af",
+           label=f"simulated ({result.landed} drops, {1 - alpha:.0%} simultaneous CI)")  # fmt: skip
+    ax.bar(x, target, w, color="#9e9e9e", label=f"target {design.target}")
+    ax.bar(x + w, model, w, color="#e5a04b", label="solid-angle model")
+    ax.set_xticks(x, [str(v) for v in values])
+    ax.set_xlabel("value")
+    ax.set_ylabel("probability")
+    extra = f", {result.cocked} cocked, {result.unsettled} unsettled" if result.cocked or result.unsettled else ""
+    ax.set_title(f"{design.name}: {result.n} pybullet drops{extra}", fontsize=10)
+    ax.legend(fontsize=8, frameon=False)
+    ax.grid(axis="y", alpha=0.3)
+    fig.tight_layout()
+    buf = io.BytesIO()
+    fig.savefig(buf, format=fmt)
+    return buf.getvalue()
