@@ -142,3 +142,9 @@ def test_output_folder_that_is_a_file(bad, tmp_path):
     line = bad("optimize", "fudge-gem", "--starts", "1", "--out", blocker / "sub")
     assert "output folder" in line
     assert blocker.read_text() == "x"
+
+
+def test_unwritable_output_folder_even_for_root(bad):
+    # /proc refuses new folders whoever asks, root included
+    line = bad("optimize", "fudge-gem", "--starts", "1", "--out", "/proc/diefab-out")
+    assert "cannot create output folder /proc/diefab-out" in line
