@@ -35,7 +35,9 @@ def solid_angle_model(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
     return omega / omega.sum()
 
 
-MODELS: dict[str, Model] = {"solid-angle": solid_angle_model}
+from .fastmodel import fast_model  # noqa: E402 -- calibrated against pybullet (issue 6)
+
+MODELS: dict[str, Model] = {"solid-angle": solid_angle_model, "fast": fast_model}
 
 
 def _model(name: str) -> Model:

@@ -1,0 +1,48 @@
+"""Run every benchmark, one after the other, and print their figures.
+
+    python benchmarks/run_all.py           # the full set (about an hour on 2 cores)
+    python benchmarks/run_all.py --quick   # small sizes (a few minutes)
+
+Each benchmark is also a command of its own; see its docstring.
+"""
+
+from __future__ import annotations
+
+import argparse
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+HERE = Path(__file__).parent
+
+#: script -> arguments for the full and the quick run
+BENCHMARKS = {
+    "bench_core.py": ([], ["--quick"]),
+    "bench_net.py": ([], []),
+    "bench_stl.py": ([], ["--repeat", "3"]),
+    "bench_validate.py": ([], ["--n", "3000"]),
+    "bench_fastmodel.py": ([], ["--designs", "4", "--drops", "3000"]),
+    "bench_simopt.py": ([], ["--budget", "1", "--validate", "3000"]),
+}
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="small sizes")
+    args = parser.parse_args()
+    failed = []
+    for script, (full, quick) in BENCHMARKS.items():
+        cmd = [sys.executable, str(HERE / script), *(quick if args.quick else full)]
+        print(f"\n=== {' '.join(cmd[1:])}", flush=True)
+        start = time.perf_counter()
+        if subprocess.run(cmd).returncode != 0:
+            failed.append(script)
+        print(f"=== {script}: {time.perf_counter() - start:.0f} s", flush=True)
+    if failed:
+        print(f"failed: {', '.join(failed)}", file=sys.stderr)
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
