@@ -6,7 +6,9 @@ a deterministic landing model (``solid-angle``, or any model in
 in the parameter box; the stability constraint is an extreme barrier: a point
 whose smallest face margin is below `min_margin` scores ``1 + violation``,
 far above any feasible objective, so the simplex is pushed back inside
-without the optimum being dragged onto the boundary.
+without the optimum being dragged onto the boundary.  A stable point that
+cannot be labelled (two resting faces showing the same top face) scores
+``1 + UNREADABLE``.
 
 Examples
 --------
@@ -27,7 +29,7 @@ import numpy as np
 from .design import Design
 from .errors import DesignError
 from .families import family
-from .geometry import Polyhedron, face_margins
+from .geometry import Polyhedron, face_margins, up_faces
 from .mass import mass_properties
 from .models import MODELS
 from .stats import jsd, pearson_divergence, tvd
@@ -42,6 +44,9 @@ OBJECTIVES: dict[str, Callable[[np.ndarray, np.ndarray], float]] = {
 
 #: Score of a point that violates the stability constraint (plus the violation).
 INFEASIBLE = 1.0
+#: Added to the score of a stable point that cannot be labelled (two resting
+#: faces would show the same face on top, see :attr:`diefab.design.Design.label_of`).
+UNREADABLE = 0.5
 #: Score of a point that is not a valid polyhedron at all.
 INVALID = 1e6
 #: Fresh-simplex restarts from the best point found.
@@ -115,7 +120,14 @@ class Problem:
         violation = self.min_margin - margins.min()
         if violation >= 0:
             score = INFEASIBLE + violation
+        elif not self._readable(poly):
+            score = INFEASIBLE + UNREADABLE
         return score, values, margins
+
+    def _readable(self, poly: Polyhedron) -> bool:
+        """True if no two resting faces put the same face on top (unless the design sets its text)."""
+        tops = [u for u in up_faces(poly) if u is not None and poly.names[u] not in self.design.labels]
+        return len(tops) == len(set(tops))
 
     @cached_property
     def _value_index(self) -> np.ndarray:

@@ -62,3 +62,32 @@ def test_objectives_are_consistent():
         r = optimize_design(d, objective=objective, starts=2, seed=0)
         goal = d.target_distribution.probabilities
         assert np.abs(r.values - goal).sum() / 2 < 0.1
+
+
+def test_optimum_is_readable():
+    result = optimize_design(load_design("fudge-gem"), seed=0)
+    tops = [t for t in result.design.label_face.values() if t is not None]
+    assert len(tops) == len(set(tops))
+    assert len(result.design.label_of) == 9  # eight values and the logo
+
+
+def test_unreadable_points_score_above_every_readable_stable_one():
+    d = load_design("fudge-gem")
+    problem = Problem(d, ("a", "b", "c", "d"), min_margin=0.0)
+    # some stable gems in the box put the same face on top for two resting faces: find one
+    rng = np.random.default_rng(0)
+    found = False
+    for x in rng.random((400, 4)):
+        params = problem.params(x)
+        score, _, margins = problem.evaluate(params)
+        if margins.min() > 0 and not problem._readable(_poly(params)):
+            assert score >= 1.5
+            found = True
+            break
+    assert found
+
+
+def _poly(params):
+    from diefab.families import gem_polyhedron
+
+    return gem_polyhedron(params)
