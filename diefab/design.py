@@ -225,7 +225,11 @@ class Design:
 
 
 def _templates_dir():
-    return resources.files("diefab.templates")
+    """The shipped templates: package data when installed, ``templates/`` beside ``diefab/`` in a checkout."""
+    try:
+        return resources.files("diefab.templates")
+    except ModuleNotFoundError:  # imported from a source tree (e.g. pytest run in the repository)
+        return Path(__file__).resolve().parent.parent / "templates"
 
 
 def list_templates() -> list[Design]:
