@@ -80,6 +80,23 @@ def get_design(spec: str, params: tuple[str, ...] = (), target: str | None = Non
     return design
 
 
+def free_parameters(design: Design, free: str | None) -> list[str] | None:
+    """``--free a,b,c`` -> the named parameters of the design's family (None when not given)."""
+    if free is None:
+        return None
+    from .families import family
+
+    names = [n.strip() for n in free.split(",") if n.strip()]
+    known = [p.name for p in family(design.family).parameters]
+    bad = [n for n in names if n not in known]
+    if bad or not names:
+        raise click.BadParameter(
+            f"{free!r}: {bad[0] if bad else 'none'} is not a parameter of {design.family} ({','.join(known)})",
+            param_hint="--free",
+        )
+    return names
+
+
 def values_dict(design: Design, probs: np.ndarray) -> dict[str, float]:
     """``{"-4": p, ...}`` keyed by the design's values."""
     return {str(v): float(p) for v, p in zip(design.support, probs)}
@@ -343,7 +360,6 @@ def optimize(ctx, design, params, model, target, seed, min_margin, starts, free,
     resumed with --resume OUT/NAME.
     """
     from .design import design_to_toml
-    from .families import family
     from .optimize import optimize_design
 
     if model == "simulation":
@@ -352,16 +368,7 @@ def optimize(ctx, design, params, model, target, seed, min_margin, starts, free,
     d = get_design(design, params, target)
     if not np.isfinite(min_margin) or min_margin < 0:
         raise click.BadParameter(f"{min_margin} must be a non-negative number", param_hint="--min-margin")
-    names = None
-    if free is not None:
-        names = [n.strip() for n in free.split(",") if n.strip()]
-        known = [p.name for p in family(d.family).parameters]
-        bad = [n for n in names if n not in known]
-        if bad or not names:
-            raise click.BadParameter(
-                f"{free!r}: {bad[0] if bad else 'none'} is not a parameter of {d.family} ({','.join(known)})",
-                param_hint="--free",
-            )
+    names = free_parameters(d, free)
     ensure_dir(out_dir)
     result = optimize_design(
         d, model=model, objective=objective, names=names, min_margin=min_margin, starts=starts, seed=seed, name=name
@@ -769,16 +776,7 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         history, warning = log.read()
         run_name = Path(resume).name
     else:
-        names = [p.name for p in family(d.family).parameters]
-        if free is not None:
-            names = [n.strip() for n in free.split(",") if n.strip()]
-            known = [p.name for p in family(d.family).parameters]
-            bad = [n for n in names if n not in known]
-            if bad or not names:
-                raise click.BadParameter(
-                    f"{free!r}: {bad[0] if bad else 'none'} is not a parameter of {d.family} ({','.join(known)})",
-                    param_hint="--free",
-                )
+        names = free_parameters(d, free) or [p.name for p in family(d.family).parameters]
         run_name = name or f"{d.name}-simulation-opt"
         log = RunLog(out_dir / run_name)
         if log.path.exists():
