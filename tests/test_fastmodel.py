@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from diefab.design import load_design
 from diefab.errors import DesignError
 from diefab.families import GEM, gem_polyhedron
-from diefab.fastmodel import fast_model, landing_probabilities, tipping_barriers
+from diefab.fastmodel import fast_model, landing_probabilities, roll_retention, tipping_barriers
 from diefab.geometry import Polyhedron, face_margins
 from diefab.mass import Fill, mass_properties
 from diefab.models import MODELS, value_probabilities
@@ -112,3 +112,33 @@ def test_optimize_with_the_fast_model():
     result = optimize_design(load_design("fudge-gem"), model="fast", starts=1, seed=0, max_evaluations=300)
     assert result.margins.min() >= 0.05
     assert result.objective < 0.1
+
+
+def test_roll_retention_of_a_cube_is_the_rolling_polygon_law():
+    # cube of side 2 about its centre: k^2 = 2/3 about an edge-parallel axis, r^2 = 2, the faces turn 90 degrees
+    d6 = load_design("d6")
+    eta = roll_retention(d6.polyhedron, d6.mass_properties().center)
+    assert np.allclose(eta, ((2 / 3) / (2 / 3 + 2)) ** 2)
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.lists(st.floats(0, 1), min_size=5, max_size=5))
+def test_roll_retention_is_an_energy_share_and_the_same_from_both_sides(u):
+    poly = _unit_gem(u)
+    if poly is None:
+        return
+    eta = roll_retention(poly, mass_properties(poly, Fill()).center)
+    assert np.all((eta >= 0) & (eta <= 1))
+    tail, head, _, _ = poly._ring
+    n = len(poly.vertices)
+    code = tail * n + head
+    reverse = np.argsort(code)[np.searchsorted(np.sort(code), head * n + tail)]
+    assert np.allclose(eta, eta[reverse])
+
+
+def test_no_rolling_term_is_the_barrier_chain():
+    d = load_design("fudge-gem")
+    c = d.mass_properties().center
+    p = landing_probabilities(d.polyhedron, c, roll_power=0.0)
+    assert np.all(p >= 0) and p.sum() == pytest.approx(1.0)
+    assert not np.allclose(p, fast_model(d.polyhedron, c))
