@@ -97,6 +97,12 @@ def free_parameters(design: Design, free: str | None) -> list[str] | None:
     return names
 
 
+def heading(design: Design, **settings: object) -> str:
+    """``[bold]name[/bold]  a=1.18 b=0.52 ...  key=value ...``: the first line of a human report."""
+    params = " ".join(f"{k}={v:g}" for k, v in design.params.items())
+    return "  ".join([f"[bold]{design.name}[/bold]", params, *(f"{k}={v}" for k, v in settings.items())])
+
+
 def values_dict(design: Design, probs: np.ndarray) -> dict[str, float]:
     """``{"-4": p, ...}`` keyed by the design's values."""
     return {str(v): float(p) for v, p in zip(design.support, probs)}
@@ -222,8 +228,7 @@ def predict(design: str, params, model: str, fill: str | None, target: str | Non
     from rich.table import Table
 
     con = _console()
-    params_text = " ".join(f"{k}={v:g}" for k, v in d.params.items())
-    con.print(f"[bold]{d.name}[/bold]  {params_text}  model={model}  fill={fill_model.kind}")
+    con.print(heading(d, model=model, fill=fill_model.kind))
     con.print(f"centre of mass: ({com[0]:.4f}, {com[1]:.4f}, {com[2]:.4f})  model units")
     table = Table("face", "value", "label on", "probability", "margin")
     for f in result["faces"]:
@@ -664,8 +669,7 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, ta
     from rich.table import Table
 
     con = _console()
-    params_text = " ".join(f"{k}={v:g}" for k, v in d.params.items())
-    con.print(f"[bold]{d.name}[/bold]  {params_text}  fill={d.fill.kind}  target={d.target}")
+    con.print(heading(d, fill=d.fill.kind, target=d.target))
     table = Table("value", "count", "simulated", "95% simultaneous CI", "target", "solid angle")
     signed = min(d.support) < 0
     for k, v in enumerate(d.support):
