@@ -367,7 +367,7 @@ def _drop_collinear(points: np.ndarray, ring: np.ndarray) -> np.ndarray:
     prev, nxt = np.roll(p, 1, axis=0), np.roll(p, -1, axis=0)
     cross = np.linalg.norm(np.cross(p - prev, nxt - p), axis=1)
     scale = np.linalg.norm(p - prev, axis=1) * np.linalg.norm(nxt - p, axis=1)
-    return ring[cross > 1e-9 * scale]
+    return ring[cross > tol.COLLINEAR * scale]
 
 
 def solid_angles(poly: Polyhedron, point: np.ndarray) -> np.ndarray:

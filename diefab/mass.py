@@ -29,6 +29,7 @@ from typing import Literal
 
 import numpy as np
 
+from . import tolerances as tol
 from .errors import DesignError
 from .geometry import Polyhedron, _cross
 
@@ -119,7 +120,7 @@ def inset(poly: Polyhedron, distance: float) -> Polyhedron | None:
         bounds=[(None, None)] * 3 + [(0, None)],
         method="highs",
     )
-    if not res.success or res.x[3] <= 1e-9 * max(1.0, float(np.ptp(poly.vertices, axis=0).max())):
+    if not res.success or res.x[3] <= tol.LENGTH * max(1.0, float(np.ptp(poly.vertices, axis=0).max())):
         return None
     try:
         hs = HalfspaceIntersection(np.column_stack([normals, -offsets]), res.x[:3])

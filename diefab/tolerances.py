@@ -15,6 +15,8 @@ COPLANAR = 1e-7
 AREA = 1e-12
 LENGTH = 1e-9
 VOLUME = 1e-12
+#: Sine of the angle below which three consecutive hull points are collinear.
+COLLINEAR = 1e-9
 #: Two face/up-direction cosines closer than this are a tie.
 TIE = 1e-9
 #: Relative difference in area or volume between a mesh and its convex hull
