@@ -30,6 +30,7 @@ from .errors import GeometryError
 
 __all__ = [
     "Polyhedron",
+    "RestBasins",
     "face_margins",
     "solid_angles",
     "up_faces",
@@ -443,3 +444,185 @@ def up_faces(poly: Polyhedron) -> list[int | None]:
         best, second = row[order[0]], row[order[1]]
         out.append(None if best - second < tol.TIE else int(order[0]))
     return out
+
+
+@dataclass(frozen=True, eq=False)
+class RestBasins:
+    """Where a die rolls to when it creeps downhill from any orientation.
+
+    With the centre of mass at the origin, the height of the centre of mass
+    of a die touching the ground with unit "down" direction *d* (body
+    coordinates) is the support function ``U(d) = max_v v . d`` over the
+    vertices.  On the sphere of directions U is linear on the normal cone of
+    each vertex; its minima are the normals of the faces the die can rest
+    on.  Its gradient flow (the die rolling quasi-statically, always
+    downhill) is piecewise simple: inside the cone of vertex v, d moves on
+    the great circle away from ``v / |v|`` until it reaches the arc of an
+    edge (v, w).  If the foot of the perpendicular from the centre of mass
+    to the edge line lies beyond w, the flow crosses into w's cone (the die
+    pivots on to w); otherwise the arc is a valley and d slides along it,
+    away from the direction ``s_e`` of that foot, to the normal of one of
+    the edge's two faces.  :meth:`face_of` follows this flow exactly: it
+    tells which face's **basin** a direction lies in.
+
+    The saddles of U are the valley arcs' ``s_e`` that lie strictly inside
+    their arcs, and the rim of a basin is made of flow lines running into
+    saddles, along which U grows away from the saddle: the lowest point of
+    face f's rim is its lowest saddle, ``min_e |foot_e| - h_f`` above its
+    rest height ``h_f`` (:attr:`barriers`).  A die oriented inside f's basin
+    whose total mechanical energy per unit weight is below
+    ``h_f + barriers[f]`` can never leave it, since its centre of mass is
+    never lower than ``U(d)``: the physics validator's early stop.
+
+    Only dice that can rest on every face are handled; :meth:`of` returns
+    None for the others.
+
+    Attributes
+    ----------
+    vertices : (n, 3) float
+        Hull vertices relative to the centre of mass.
+    neighbors : (n, k) int
+        For each vertex, its neighbours along edges (padded by repetition).
+    away : (n, k, 3) float
+        Unit vectors from each of those neighbours toward the vertex.
+    crosses : (n, k) bool
+        True where the flow crosses that edge into the neighbour's cone.
+    arc_angles : (n, k, 2) float
+        Signed angle from the edge's foot direction to each of its two face normals, about the edge.
+    arc_axes : (n, k, 3) float
+        Unit edge direction those angles are measured about.
+    arc_feet : (n, k, 3) float
+        Unit direction of the edge's foot ``s_e``.
+    arc_faces : (n, k, 2) int
+        The edge's two faces.
+    barriers : (m,) float
+        Lowest saddle of each face's basin above its rest height.
+    """
+
+    vertices: np.ndarray
+    neighbors: np.ndarray
+    away: np.ndarray
+    crosses: np.ndarray
+    arc_angles: np.ndarray
+    arc_axes: np.ndarray
+    arc_feet: np.ndarray
+    arc_faces: np.ndarray
+    barriers: np.ndarray
+
+    @classmethod
+    def of(cls, poly: Polyhedron, center: np.ndarray) -> RestBasins | None:
+        """The basins of `poly` with its centre of mass at `center`, or None if it cannot rest on every face."""
+        center = np.asarray(center, dtype=float)
+        if face_margins(poly, center).min() <= 0:
+            return None
+        vertices = poly.vertices - center
+        heights = poly.offsets - poly.normals @ center
+        edges, faces = poly.edges, poly.edge_faces
+        p0, p1 = vertices[edges[:, 0]], vertices[edges[:, 1]]
+        axis = p1 - p0
+        t = -np.einsum("ij,ij->i", p0, axis) / np.einsum("ij,ij->i", axis, axis)
+        axis /= np.linalg.norm(axis, axis=1)[:, None]
+        foot = p0 + t[:, None] * (p1 - p0)
+        reach = np.linalg.norm(foot, axis=1)
+        feet = foot / reach[:, None]
+
+        def angle(n: np.ndarray) -> np.ndarray:
+            return np.arctan2(np.einsum("ij,ij->i", axis, _cross(feet, n)), np.einsum("ij,ij->i", feet, n))
+
+        angles = np.stack([angle(poly.normals[faces[:, 0]]), angle(poly.normals[faces[:, 1]])], axis=1)
+        valley = (t > 0) & (t < 1)
+        saddle = valley & (angles[:, 0] * angles[:, 1] < 0)  # the foot strictly inside the arc
+        barriers = np.full(len(poly.faces), np.inf)
+        for side in (0, 1):
+            np.minimum.at(barriers, faces[saddle, side], reach[saddle] - heights[faces[saddle, side]])
+        if not np.all(np.isfinite(barriers)):
+            return None  # a face with no saddle around it (a die with a single resting face)
+        # per vertex, its incident edges (padded by repeating the first)
+        incident: list[list[tuple[int, int, bool]]] = [[] for _ in range(len(vertices))]
+        for k, (i, j) in enumerate(edges):
+            incident[i].append((k, j, bool(t[k] >= 1)))  # from i the flow crosses to j if the foot is beyond j
+            incident[j].append((k, i, bool(t[k] <= 0)))
+        width = max(len(row) for row in incident)
+        table = np.array([row + [row[0]] * (width - len(row)) for row in incident])  # (n, width, 3)
+        edge, other, crosses = table[..., 0], table[..., 1], table[..., 2].astype(bool)
+        away = vertices[:, None, :] - vertices[other]
+        away /= np.linalg.norm(away, axis=2)[..., None]
+        return cls(
+            vertices, other, away, crosses, angles[edge], axis[edge], feet[edge], faces[edge], barriers
+        )
+
+    #: Cells along each edge of the cube map behind :meth:`lookup`.
+    LOOKUP_CELLS = 64
+
+    @cached_property
+    def _cube_map(self) -> np.ndarray:
+        """(6, c, c) int: the basin of each cube-map cell whose four corners agree, -1 where they differ."""
+        c = self.LOOKUP_CELLS
+        grid = np.linspace(-1.0, 1.0, c + 1)
+        u, v = np.meshgrid(grid, grid, indexing="ij")
+        corners = np.empty((6, c + 1, c + 1), dtype=np.intp)
+        for cube in range(6):
+            axis, sign = divmod(cube, 2)
+            d = np.empty((c + 1, c + 1, 3))
+            d[..., axis] = 1.0 if sign else -1.0
+            d[..., (axis + 1) % 3], d[..., (axis + 2) % 3] = u, v
+            d /= np.linalg.norm(d, axis=2)[..., None]
+            corners[cube] = self.face_of(d.reshape(-1, 3)).reshape(c + 1, c + 1)
+        a, b, e, f = corners[:, :-1, :-1], corners[:, 1:, :-1], corners[:, :-1, 1:], corners[:, 1:, 1:]
+        return np.where((a == b) & (a == e) & (a == f), a, -1)
+
+    def lookup(self, down: np.ndarray) -> np.ndarray:
+        """Same as :meth:`face_of`, through a cube map of the basins (exact flow only near basin rims).
+
+        A cell of the map whose four corners lie in one basin takes that
+        basin; directions in other cells are followed by :meth:`face_of`.
+        Building the map costs one :meth:`face_of` over ``6 (c + 1)**2``
+        directions, once per die.
+        """
+        d = np.atleast_2d(np.asarray(down, dtype=float))
+        table, c = self._cube_map, self.LOOKUP_CELLS
+        rows = np.arange(len(d))
+        axis = np.argmax(np.abs(d), axis=1)
+        major = d[rows, axis]
+        cube = 2 * axis + (major > 0)
+        scale = np.abs(major)
+        i = np.clip(((d[rows, (axis + 1) % 3] / scale + 1) * (c / 2)).astype(np.intp), 0, c - 1)
+        j = np.clip(((d[rows, (axis + 2) % 3] / scale + 1) * (c / 2)).astype(np.intp), 0, c - 1)
+        out = table[cube, i, j]
+        rim = np.flatnonzero(out < 0)
+        if len(rim):
+            out[rim] = self.face_of(d[rim])
+        return out
+
+    def face_of(self, down: np.ndarray) -> np.ndarray:
+        """(k,) int: the face whose basin each unit direction of `down` ((k, 3), body frame) lies in."""
+        d = np.array(np.atleast_2d(down), dtype=float)
+        out = np.full(len(d), -1)
+        v = np.argmax(d @ self.vertices.T, axis=1)  # the lowest vertex: d lies in its normal cone
+        live = np.arange(len(d))
+        for _ in range(len(self.vertices) + 1):  # the flow visits each vertex cone at most once
+            if len(live) == 0:
+                break
+            dl, vl = d[live], v[live]
+            apex = self.vertices[vl] / np.linalg.norm(self.vertices[vl], axis=1)[:, None]
+            u = np.einsum("ij,ij->i", dl, apex)[:, None] * dl - apex  # downhill tangent
+            norm = np.linalg.norm(u, axis=1)
+            u /= np.where(norm > 0, norm, 1.0)[:, None]
+            # on x(theta) = cos(theta) d + sin(theta) u, the cone's side k (away_k . x >= 0)
+            # is crossed at theta = atan2(away_k . u, away_k . d) + pi / 2; the first one is the exit
+            away = self.away[vl]
+            theta = np.arctan2(np.einsum("ikj,ij->ik", away, u), np.einsum("ikj,ij->ik", away, dl)) + np.pi / 2
+            k = np.argmin(theta, axis=1)
+            t = theta[np.arange(len(live)), k][:, None]
+            x = np.cos(t) * dl + np.sin(t) * u
+            cross = self.crosses[vl, k]
+            # a valley: slide away from the foot direction, to the end of the arc on that side
+            axis, foot = self.arc_axes[vl, k], self.arc_feet[vl, k]
+            phi = np.arctan2(np.einsum("ij,ij->i", axis, _cross(foot, x)), np.einsum("ij,ij->i", foot, x))
+            ends = self.arc_angles[vl, k]
+            side = np.where(phi >= 0, np.argmax(ends, axis=1), np.argmin(ends, axis=1))
+            out[live[~cross]] = self.arc_faces[vl, k, side][~cross]
+            d[live[cross]] = x[cross]
+            v[live[cross]] = self.neighbors[vl, k][cross]
+            live = live[cross]
+        return out

@@ -345,7 +345,7 @@ def drop(
         raise PhysicsError(f"rotation must be a (3, 3) rotation matrix, got shape {r.shape}")
     quat = Rotation.from_matrix(r @ body.rotation).as_quat()  # body (principal) frame -> world
     state = np.array([0.0, 0.0, float(height), *quat, *linear_velocity, *angular_velocity], dtype=float)
-    world = World(body, settings, slots=1)
+    world = World(body, settings, slots=1, engine_defaults=plain)
     try:
         code = world.run_plain(state[None])[0] if plain else world.run(state[None])[0]
     finally:

@@ -303,7 +303,7 @@ class _Evaluator:
                     "(the run's settings or diefab's version changed)"
                 )
         else:
-            if self.should_stop(i):
+            if self.should_stop(i, drops):
                 raise _Stop
             record = {"i": i, "kind": kind, **self.objective(x, drops)}
             self.on_evaluation(record)
@@ -359,7 +359,9 @@ def optimize_by_simulation(
     on_best : callable(record)
         Called whenever the incumbent improves (also during the replay).
     budget_seconds : float, optional
-        Wall time for the whole run, counting the history's ``elapsed``.
+        Wall time for the whole run, counting the history's ``elapsed``; an
+        evaluation that would end past it (at the latest evaluation's
+        seconds per drop) is not started.
     max_evaluations : int, optional
         Stop after this many evaluations in all (history included).
     objective : callable(x, drops) -> record, optional
@@ -378,13 +380,20 @@ def optimize_by_simulation(
     elapsed0 = float(history[-1].get("elapsed", 0.0)) if history else 0.0
     started = time.monotonic()
 
-    def should_stop(i: int) -> bool:
+    rate = [0.0]  # seconds per drop of the latest simulated evaluation
+
+    def should_stop(i: int, drops: int) -> bool:
         if max_evaluations is not None and i >= max_evaluations:
             return True
-        return budget_seconds is not None and elapsed0 + time.monotonic() - started >= budget_seconds
+        if budget_seconds is None:
+            return False
+        # an evaluation that would end past the budget is not started
+        return elapsed0 + time.monotonic() - started + rate[0] * drops >= budget_seconds
 
     def record_evaluation(record: dict[str, Any]) -> None:
         record["elapsed"] = elapsed0 + time.monotonic() - started
+        if record.get("drops") and record.get("seconds"):
+            rate[0] = record["seconds"] / record["drops"]
         on_evaluation(record)
 
     ev = _Evaluator(objective, history, record_evaluation, should_stop)

@@ -33,6 +33,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .geometry import RestBasins
+
 __all__ = [
     "COCKED",
     "UNSETTLED",
@@ -49,9 +51,9 @@ COCKED = -1
 UNSETTLED = -2
 
 #: Steps between two settle checks of the fast path (it never changes a trajectory).
-CHECK_EVERY = 16
+CHECK_EVERY = 32
 #: Die bodies stepped together in one world.
-SLOTS = 8
+SLOTS = 16
 #: Where an idle slot waits, far from the others (it never touches anything).
 _PARK = (0.0, 0.0, 1.0e4)
 
@@ -92,10 +94,13 @@ class DieBody:
         Outward unit face normals, body frame, polyhedron face order.
     heights : (m,) float
         Distance from the centre of mass to each face plane.
+    basins : RestBasins or None
+        Which face's basin each orientation lies in, body frame (None for a
+        die that cannot rest on every face: the energy rule is then off).
     barriers : (m,) float
-        Height the centre of mass must rise, resting on each face, to tip over
-        the lowest edge of that face: a lower bound on the potential barrier
-        around the face (distance to the nearest edge line minus the height).
+        Height the centre of mass must rise, resting on each face, to leave
+        the face's basin (its lowest saddle, :attr:`RestBasins.barriers`);
+        zero when `basins` is None.
     mass : float
     inertia : (3,) float
         Principal moments of inertia.
@@ -108,6 +113,7 @@ class DieBody:
     vertices: np.ndarray
     normals: np.ndarray
     heights: np.ndarray
+    basins: RestBasins | None
     barriers: np.ndarray
     mass: float
     inertia: np.ndarray
@@ -135,14 +141,9 @@ def die_body(poly, mass_props) -> DieBody:
     vertices = (poly.vertices - center) @ axes
     normals = poly.normals @ axes
     heights = poly.offsets - poly.normals @ center
-    barriers = np.empty(len(poly.faces))
-    for k, face in enumerate(poly.faces):
-        p0 = vertices[face]
-        edge = np.roll(p0, -1, axis=0) - p0
-        # distance from the origin (centre of mass) to each edge's line
-        t = -np.einsum("ij,ij->i", p0, edge) / np.einsum("ij,ij->i", edge, edge)
-        barriers[k] = np.linalg.norm(p0 + t[:, None] * edge, axis=1).min() - heights[k]
-    return DieBody(vertices, normals, heights, barriers, float(mass_props.mass), moments, axes, center)
+    basins = RestBasins.of(poly.with_vertices(vertices), np.zeros(3))
+    barriers = np.zeros(len(poly.faces)) if basins is None else basins.barriers
+    return DieBody(vertices, normals, heights, basins, barriers, float(mass_props.mass), moments, axes, center)
 
 
 # ----------------------------------------------------------------------
@@ -285,9 +286,14 @@ class World:
     settings : PhysicsSettings
     slots : int
         Dice that fall side by side (they never touch each other).
+    engine_defaults : bool
+        Keep pybullet's own engine parameters (50 solver iterations with its
+        residual early exit) instead of ``settings.solver_iterations`` fixed
+        iterations: the straightforward loop a paper script would run
+        (:meth:`run_plain`, one slot).
     """
 
-    def __init__(self, body: DieBody, settings, slots: int = SLOTS) -> None:
+    def __init__(self, body: DieBody, settings, slots: int = SLOTS, *, engine_defaults: bool = False) -> None:
         p = import_pybullet()
         self.p, self.body, self.settings = p, body, settings
         s = settings
@@ -296,12 +302,13 @@ class World:
         p.setTimeStep(s.time_step, physicsClientId=cid)
         # a fixed number of solver iterations (no residual early exit, which would couple the dice
         # solved in one batch) and sorted overlapping pairs: drop i is the same in any slot
-        p.setPhysicsEngineParameter(
-            numSolverIterations=s.solver_iterations,
-            solverResidualThreshold=0.0,
-            deterministicOverlappingPairs=1,
-            physicsClientId=cid,
-        )
+        if not engine_defaults:
+            p.setPhysicsEngineParameter(
+                numSolverIterations=s.solver_iterations,
+                solverResidualThreshold=0.0,
+                deterministicOverlappingPairs=1,
+                physicsClientId=cid,
+            )
         plane = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=cid)
         self.ground = p.createMultiBody(0, plane, physicsClientId=cid)
         p.changeDynamics(
@@ -385,9 +392,10 @@ class World:
         Each drop first falls freely (:func:`fly`, no engine needed) until it
         nears the ground; then the engine steps all slots together, and every
         :data:`CHECK_EVERY` steps each die is checked: it has landed on face f
-        once its kinetic energy plus its potential energy above rest on f is
-        below ``settings.energy_fraction`` of the energy needed to tip over f's
-        lowest edge (it can never leave f); it has settled once it has been
+        once its orientation lies in f's basin (:class:`RestBasins`) and its
+        kinetic energy plus its potential energy above rest on f is below
+        ``settings.energy_fraction`` of f's basin barrier (it can never leave
+        the basin, whose only resting place is f); it has settled once it has been
         still for ``settings.settle_time`` (then it lies on the face within
         ``face_tolerance`` of straight down, or is cocked); it is unsettled at
         ``settings.time_limit``.  `early` False turns off the free-fall
@@ -410,8 +418,9 @@ class World:
         mg = body.mass * s.gravity
         rest = body.heights + s.collision_margin
         limit = (s.energy_fraction if early else 0.0) * mg * body.barriers
+        ceiling = (mg * rest + limit).max()  # total energy above which no die is trapped
         cos_tol = np.cos(np.radians(s.face_tolerance))
-        half_m, half_i, normals = 0.5 * body.mass, 0.5 * body.inertia, body.normals
+        half_m, half_i, normals, basins = 0.5 * body.mass, 0.5 * body.inertia, body.normals, body.basins
         p, cid, dice = self.p, self.cid, self.dice
         nxt = 0
 
@@ -445,17 +454,25 @@ class World:
             face = np.argmax(cos, axis=1)
             lin, ang = state[:, 7:10], state[:, 10:13]
             omega = np.einsum("kji,kj->ki", rot, ang)  # body-frame angular velocity
-            energy = half_m * (lin * lin).sum(1) + (half_i * omega * omega).sum(1)
-            energy += mg * (state[:, 2] - rest[face])
+            energy = half_m * (lin * lin).sum(1) + (half_i * omega * omega).sum(1) + mg * state[:, 2]
+            basin = face.copy()
+            low = np.flatnonzero(energy < ceiling)  # only these can be trapped in any basin
+            if basins is not None and len(low):
+                basin[low] = basins.lookup(-rot[low, 2, :])
+            energy -= mg * rest[basin]
             is_still = ((lin * lin).sum(1) < s.still_speed**2) & ((ang * ang).sum(1) < s.still_spin**2)
             still[live] = np.where(is_still, still[live] + CHECK_EVERY, 0)
             down = cos[np.arange(len(live)), face] >= cos_tol
-            landed = (energy < limit[face]) | (down & (still[live] >= settle_steps))
+            trapped = energy < limit[basin]
+            landed = trapped | (down & (still[live] >= settle_steps))
             cocked = ~down & (still[live] >= cocked_steps)
             timeout = steps[live] >= max_steps
             for j in np.flatnonzero(landed | cocked | timeout):
                 k = live[j]
-                outcomes[current[k]] = face[j] if landed[j] else COCKED if cocked[j] else UNSETTLED
+                if landed[j]:
+                    outcomes[current[k]] = basin[j] if trapped[j] else face[j]
+                else:
+                    outcomes[current[k]] = COCKED if cocked[j] else UNSETTLED
                 load(k)
             if nxt >= n:
                 for k in np.flatnonzero(current < 0):
@@ -502,19 +519,20 @@ class World:
 _LOCAL = threading.local()
 
 
-def _world(body: DieBody, settings, slots: int) -> World:
-    key = (body.key(), settings, slots)
+def _world(body: DieBody, settings, plain: bool) -> World:
+    key = (body.key(), settings, plain)
     world = getattr(_LOCAL, "world", None)
     if world is None or _LOCAL.key != key:
         if world is not None:
             world.close()
-        _LOCAL.world, _LOCAL.key = World(body, settings, slots), key
+        _LOCAL.world = World(body, settings, 1, engine_defaults=True) if plain else World(body, settings)
+        _LOCAL.key = key
     return _LOCAL.world
 
 
 def run_batch(body: DieBody, settings, seed: int, start: int, stop: int, plain: bool = False) -> np.ndarray:
     """Outcome codes of drops ``start .. stop - 1`` at `seed` (the unit of work sent to a worker)."""
-    world = _world(body, settings, 1 if plain else SLOTS)
+    world = _world(body, settings, plain)
     states = initial_conditions(seed, start, stop, settings)
     return world.run_plain(states) if plain else world.run(states)
 

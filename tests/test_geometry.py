@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from diefab.errors import GeometryError
 from diefab.families import GEM, gem_polyhedron
-from diefab.geometry import Polyhedron, face_margins, solid_angles, up_faces
+from diefab.geometry import Polyhedron, RestBasins, face_margins, solid_angles, up_faces
 
 CUBE = [[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
 OCTAHEDRON = [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]]
@@ -175,3 +175,83 @@ def test_non_convex_mesh_is_rejected(tmp_path):
     path.write_bytes(b"not a mesh")
     with pytest.raises(GeometryError):
         Polyhedron.from_mesh(path)
+
+
+# ----------------------------------------------------------------------
+# rest basins: where a die creeping downhill ends
+
+
+def _unit(rng, n: int) -> np.ndarray:
+    d = rng.normal(size=(n, 3))
+    return d / np.linalg.norm(d, axis=1)[:, None]
+
+
+def _gem_design(params):
+    from diefab.design import load_design
+
+    return load_design("fudge-gem").with_params(**params)
+
+
+def test_cube_basins_are_the_nearest_face_and_the_barrier_is_sqrt2_minus_1():
+    cube = Polyhedron.from_points([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+    basins = RestBasins.of(cube, np.zeros(3))
+    d = _unit(np.random.default_rng(0), 2000)
+    assert np.array_equal(basins.face_of(d), np.argmax(d @ cube.normals.T, axis=1))
+    assert np.allclose(basins.barriers, np.sqrt(2) - 1)
+
+
+def test_a_face_normal_lies_in_its_own_basin():
+    for params in ({}, {"a": 1.3, "b": 0.66, "c": 0.79, "d": 0.72, "e": 0.46}, {"c": 0.45, "d": 2.6}):
+        design = _gem_design(params)
+        assert design.margins().min() > 0
+        basins = RestBasins.of(design.polyhedron, design.mass_properties().center)
+        assert np.array_equal(basins.face_of(design.polyhedron.normals), np.arange(9))
+
+
+def test_gem_basins_follow_the_downhill_flow():
+    """Against a brute-force gradient descent of the support function on the sphere."""
+    design = _gem_design({})
+    poly, center = design.polyhedron, design.mass_properties().center
+    basins = RestBasins.of(poly, center)
+    vertices = poly.vertices - center
+    d = _unit(np.random.default_rng(1), 400)
+    x = d.copy()
+    for _ in range(4000):
+        v = vertices[np.argmax(x @ vertices.T, axis=1)]
+        x -= 0.002 * (v - np.einsum("ij,ij->i", v, x)[:, None] * x)
+        x /= np.linalg.norm(x, axis=1)[:, None]
+    descent = np.argmax(x @ poly.normals.T, axis=1)
+    assert np.mean(basins.face_of(d) == descent) >= 0.99
+
+
+def test_basin_rims_never_dip_below_the_barrier():
+    """Where two basins meet the centre of mass is at least the barrier above either face's rest."""
+    from scipy.spatial import cKDTree
+
+    rng = np.random.default_rng(2)
+    for params in ({}, {"a": 1.3, "b": 0.66, "c": 0.79, "d": 0.72, "e": 0.46}):
+        design = _gem_design(params)
+        poly, center = design.polyhedron, design.mass_properties().center
+        basins = RestBasins.of(poly, center)
+        d = _unit(rng, 60_000)
+        face = basins.face_of(d)
+        height = (d @ (poly.vertices - center).T).max(axis=1) - (poly.offsets - poly.normals @ center)[face]
+        pairs = cKDTree(d).query_pairs(0.02, output_type="ndarray")
+        rim = np.unique(pairs[face[pairs[:, 0]] != face[pairs[:, 1]]])
+        assert len(rim) > 100
+        assert np.all(height[rim] >= basins.barriers[face[rim]] * (1 - 1e-9))
+
+
+def test_basin_lookup_matches_the_exact_flow():
+    design = _gem_design({"a": 1.3, "b": 0.66, "c": 0.79, "d": 0.72, "e": 0.46})
+    basins = RestBasins.of(design.polyhedron, design.mass_properties().center)
+    d = _unit(np.random.default_rng(3), 50_000)
+    assert np.array_equal(basins.lookup(d), basins.face_of(d))
+
+
+def test_basins_need_every_face_stable():
+    # a tall thin pyramid-like gem whose top cannot hold it
+    poly = gem_polyhedron({"a": 1.0, "b": 0.5, "c": 0.2, "d": 0.3})
+    center = poly.centroid
+    assert face_margins(poly, center).min() < 0
+    assert RestBasins.of(poly, center) is None

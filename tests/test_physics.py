@@ -209,6 +209,26 @@ def test_fast_path_agrees_with_plain_loop_drop_by_drop(gem):
     assert COCKED not in set(plain.tolist()) or np.mean(plain == COCKED) < 0.05
 
 
+def test_energy_early_stop_never_changes_an_outcome(gem):
+    """Stopping a die once it is trapped in a basin gives the face it would have settled on."""
+    import dataclasses
+
+    body = die_body(gem.polyhedron, gem.mass_properties())
+    settings = PhysicsSettings()
+    states = initial_conditions(4, 0, 160, settings)
+    world = World(body, settings)
+    try:
+        early = world.run(states)
+    finally:
+        world.close()
+    world = World(body, dataclasses.replace(settings, energy_fraction=0.0))
+    try:
+        settled = world.run(states)
+    finally:
+        world.close()
+    assert np.array_equal(early, settled)
+
+
 @pytest.mark.slow
 def test_fast_path_distribution_matches_plain_loop(gem):
     body = die_body(gem.polyhedron, gem.mass_properties())
