@@ -399,7 +399,7 @@ def shutdown_pool(kill: bool = False) -> None:
 
 def _batches(n: int, workers: int) -> list[tuple[int, int]]:
     # small enough to balance the workers and move the progress bar, big enough to keep them busy
-    size = int(np.clip(n // (workers * 8), 64, 1024))
+    size = int(np.clip(n // (workers * 16), 32, 512))
     return [(start, min(start + size, n)) for start in range(0, n, size)]
 
 

@@ -424,6 +424,8 @@ class World:
         ceiling = (mg * rest + limit).max()  # total energy above which no die is trapped
         cos_tol = np.cos(np.radians(s.face_tolerance))
         half_m, half_i, normals, basins = 0.5 * body.mass, 0.5 * body.inertia, body.normals, body.basins
+        half_i_min = half_i.min()
+        still_speed2, still_spin2 = s.still_speed**2, s.still_spin**2
         p, cid, dice = self.p, self.cid, self.dice
         nxt = 0
 
@@ -452,23 +454,24 @@ class World:
                     for k in live
                 ]
             )
+            lin, ang = state[:, 7:10], state[:, 10:13]
+            speed2, spin2 = (lin * lin).sum(1), (ang * ang).sum(1)
+            is_still = (speed2 < still_speed2) & (spin2 < still_spin2)
+            still[live] = np.where(is_still, still[live] + CHECK_EVERY, 0)
+            # a lower bound of the total energy spares the dice that cannot be trapped a closer look
+            bound = half_m * speed2 + half_i_min * spin2 + mg * state[:, 2]
+            near = np.flatnonzero((bound < ceiling) | (still[live] >= settle_steps) | (steps[live] >= max_steps))
+            live, state, still_near = live[near], state[near], still[live[near]]
             rot = _quat_to_matrix(state[:, 3:7])
             cos = -rot[:, 2, :] @ normals.T  # world -z in body coordinates, against each normal
             face = np.argmax(cos, axis=1)
-            lin, ang = state[:, 7:10], state[:, 10:13]
-            omega = np.einsum("kji,kj->ki", rot, ang)  # body-frame angular velocity
-            energy = half_m * (lin * lin).sum(1) + (half_i * omega * omega).sum(1) + mg * state[:, 2]
-            basin = face.copy()
-            low = np.flatnonzero(energy < ceiling)  # only these can be trapped in any basin
-            if basins is not None and len(low):
-                basin[low] = basins.lookup(-rot[low, 2, :])
-            energy -= mg * rest[basin]
-            is_still = ((lin * lin).sum(1) < s.still_speed**2) & ((ang * ang).sum(1) < s.still_spin**2)
-            still[live] = np.where(is_still, still[live] + CHECK_EVERY, 0)
+            omega = np.einsum("kji,kj->ki", rot, state[:, 10:13])  # body-frame angular velocity
+            energy = half_m * speed2[near] + (half_i * omega * omega).sum(1) + mg * state[:, 2]
+            basin = face if basins is None else basins.lookup(-rot[:, 2, :])
+            trapped = energy - mg * rest[basin] < limit[basin]
             down = cos[np.arange(len(live)), face] >= cos_tol
-            trapped = energy < limit[basin]
-            landed = trapped | (down & (still[live] >= settle_steps))
-            cocked = ~down & (still[live] >= cocked_steps)
+            landed = trapped | (down & (still_near >= settle_steps))
+            cocked = ~down & (still_near >= cocked_steps)
             timeout = steps[live] >= max_steps
             for j in np.flatnonzero(landed | cocked | timeout):
                 k = live[j]
