@@ -5,14 +5,18 @@
 
 Prints, measured in this run on the ``fudge-gem`` template with default settings:
 
-1. drops/s of the plain loop (one process, one ``stepSimulation`` call per
-   1/240 s step, velocities polled after every step, settled after 0.1 s still);
+1. drops/s of the plain loop (one process, pybullet's own engine defaults,
+   one ``stepSimulation`` call per 1/240 s step, velocities polled after
+   every step, settled after 0.1 s still);
 2. drops/s of ``diefab.physics.simulate`` (what ``diefab validate`` runs) on
-   all cores, its ratio to (1), and the resident memory of each worker;
-3. the same-physics check: N fast-path drops against N plain-loop drops at
+   all cores over the N drops of (4), its ratio to (1), and the resident
+   memory of each worker;
+3. the early stop checked drop by drop: the fast path against itself with
+   the energy rule off (every die runs until still), at a common seed;
+4. the same-physics check: N fast-path drops against N plain-loop drops at
    independent seeds (TVD, two-sample chi2 p), and the share of identical
    outcomes drop by drop at a common seed;
-4. the fast path's distribution of values against 4dF and against the
+5. the fast path's distribution of values against 4dF and against the
    paper's 405 real rolls (Table 2).
 """
 
@@ -22,6 +26,7 @@ import argparse
 import os
 import time
 from concurrent.futures import ProcessPoolExecutor
+from dataclasses import replace
 
 import numpy as np
 from scipy.stats import chi2_contingency
@@ -63,6 +68,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--n", type=int, default=30_000, help="drops of each distribution (default 30000)")
     parser.add_argument("--n-plain-speed", type=int, default=1500, help="drops timing the plain loop")
+    parser.add_argument("--n-early", type=int, default=6000, help="drops of the early-stop check")
     parser.add_argument("--workers", type=int, default=os.cpu_count(), help="fast-path workers (default all)")
     args = parser.parse_args()
     design = load_design("fudge-gem")
@@ -75,7 +81,7 @@ def main() -> None:
     t = time.perf_counter()
     run_batch(body, settings, 10_000, 0, args.n_plain_speed, True)
     plain_rate = args.n_plain_speed / (time.perf_counter() - t)
-    print(f"plain loop:  {plain_rate:8.0f} drops/s  (1 process, {args.n_plain_speed} drops)")
+    print(f"plain loop:  {plain_rate:8.0f} drops/s  (1 process, pybullet defaults, {args.n_plain_speed} drops)")
 
     # 2. fast path, all cores (the pool is started once, as an optimizer reuses it)
     t = time.perf_counter()
@@ -86,9 +92,17 @@ def main() -> None:
     print(f"fast path:   {fast.drops_per_second:8.0f} drops/s  ({args.n} drops in {fast.seconds:.1f} s)")
     print(f"ratio:       {fast.drops_per_second / plain_rate:8.1f} x the plain loop")
     print("memory:      " + ", ".join(f"{r:.0f} MB" for r in rss) + " resident per worker")
+
+    # 3. the early stop changes no outcome
+    k = args.n_early
+    settled = simulate(design, k, seed=3, workers=args.workers, settings=replace(settings, energy_fraction=0.0))
+    early = simulate(design, k, seed=3, workers=args.workers, settings=settings)
+    same = int((early.outcomes == settled.outcomes).sum())
+    print(f"early stop (energy fraction {settings.energy_fraction}) against none, drop by drop: "
+          f"{same} of {k} identical; {settled.drops_per_second:.0f} drops/s without it")  # fmt: skip
     shutdown_pool()
 
-    # 3. same physics
+    # 4. same physics
     t = time.perf_counter()
     plain = plain_outcomes(design, settings, 2, args.n, args.workers)
     print(f"plain loop distribution: {args.n} drops in {time.perf_counter() - t:.0f} s on {args.workers} processes")
@@ -108,7 +122,7 @@ def main() -> None:
     print(f"same physics (values):                   TVD {d_val:.4f}, two-sample chi2 p = {p_val:.3f}")
     print(f"same seed, drop by drop: {np.mean(paired.outcomes == plain):.1%} of drops end alike")
 
-    # 4. against 4dF and the paper's real rolls
+    # 5. against 4dF and the paper's real rolls
     counts = fast.value_counts(design)
     goal = design.target_distribution.aligned(design.support)
     fit = goodness_of_fit(counts, goal)

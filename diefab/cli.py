@@ -800,9 +800,9 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         click.echo(f"diefab: warning: {warning}", err=True)
     client = None
     if scheduler is not None:
-        from .physics import _dask_client
+        from .physics import dask_client
 
-        client, _ = _dask_client(scheduler)
+        client, _ = dask_client(scheduler)
     best_path = log.folder / f"{run_name}.toml"
     command = f"diefab optimize {design} --model simulation --seed {spec.seed} (run {log.folder})"
     live, update = _simulation_view(spec, budget * 60, history)
@@ -878,8 +878,27 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
 # ----------------------------------------------------------------------
 
 
+def _terminate(signum, frame) -> None:
+    raise KeyboardInterrupt  # a kill (SIGTERM) stops a run as cleanly as Ctrl-C
+
+
 def main(argv: list[str] | None = None) -> None:
     """Console entry point: one-line errors, exit status 2 on bad input."""
+    import signal
+    import threading
+
+    previous = signal.getsignal(signal.SIGTERM)
+    catch = previous is signal.SIG_DFL and threading.current_thread() is threading.main_thread()
+    if catch:
+        signal.signal(signal.SIGTERM, _terminate)
+    try:
+        _main(argv)
+    finally:
+        if catch:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _main(argv: list[str] | None) -> None:
     try:
         rv = cli.main(args=argv, prog_name="diefab", standalone_mode=False)
     except click.exceptions.Abort:

@@ -49,6 +49,7 @@ __all__ = [
     "RollResult",
     "SimulationInterrupted",
     "classify_pose",
+    "dask_client",
     "drop",
     "plot_validation",
     "shutdown_pool",
@@ -369,12 +370,12 @@ def _pool(workers: int):
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
-        from .world import ignore_sigint
+        from .world import worker_signals
 
         # fork starts a worker in milliseconds and needs no `if __name__ == "__main__"` guard in the
         # caller's script; the parent never holds a pybullet world the children would touch
         method = "fork" if sys.platform == "linux" else "spawn"
-        _POOL = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method), initializer=ignore_sigint)
+        _POOL = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method), initializer=worker_signals)
         _POOL_SIZE = workers
         if not _ATEXIT:
             import atexit
@@ -403,7 +404,13 @@ def _batches(n: int, workers: int) -> list[tuple[int, int]]:
     return [(start, min(start + size, n)) for start in range(0, n, size)]
 
 
-def _dask_client(scheduler):
+def dask_client(scheduler):
+    """``(client, owned)``: a Dask client for `scheduler` (an address or a ``distributed.Client``).
+
+    ``owned`` is True when the client was opened here (the caller closes it).
+    An unreachable address fails within about three seconds with a
+    :class:`PhysicsError`.
+    """
     try:
         from distributed import Client
     except ImportError as exc:
@@ -502,7 +509,7 @@ def simulate(
         if scheduler is not None:
             from distributed import as_completed
 
-            client, own = _dask_client(scheduler)
+            client, own = dask_client(scheduler)
             try:
                 futures = client.map(run_batch, [body] * len(batches), [settings] * len(batches), [seed] * len(batches),
                                      [a for a, _ in batches], [b for _, b in batches], pure=False)  # fmt: skip

@@ -552,8 +552,14 @@ def worker_rss_mb() -> float:
     return float("nan")
 
 
-def ignore_sigint() -> None:
-    """Worker initializer: Ctrl-C is the parent's to handle (it cancels the run cleanly)."""
+def worker_signals() -> None:
+    """Worker initializer: Ctrl-C is left to the parent, and the parent's SIGTERM ends the worker.
+
+    The parent cancels a run cleanly on Ctrl-C.  A forked worker would
+    otherwise inherit the command line's SIGTERM handler, which turns SIGTERM
+    into an interrupt of the current batch, and the worker would live on.
+    """
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)

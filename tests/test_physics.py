@@ -335,6 +335,39 @@ def test_cli_interrupt_reports_finished_drops(gem, monkeypatch, capsys):
     assert "123 of 1000" in out.err and len(out.err.strip().splitlines()) == 1
 
 
+def test_sigterm_stops_validate_cleanly_with_its_workers(tmp_path):
+    """A kill (SIGTERM) ends a run like Ctrl-C: one line, exit 130, no worker left behind."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "diefab", "validate", "fudge-gem", "--sims", "2000000", "--workers", "2"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+    )  # fmt: skip
+    children: set[int] = set()
+    deadline = time.monotonic() + 60
+    while len(children) < 2 and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.5)
+        for task in Path(f"/proc/{proc.pid}/task").glob("*/children"):
+            children |= {int(c) for c in task.read_text().split()}
+    time.sleep(2.0)  # let the workers finish some batches
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130
+    assert "of 2000000" in err and len(err.strip().splitlines()) == 1
+    time.sleep(0.5)
+    for pid in children:
+        try:
+            status = Path(f"/proc/{pid}/status").read_text()
+        except FileNotFoundError:
+            continue
+        assert "zombie" in status or f"PPid:\t{os.getpid()}" not in status
+
+
 @pytest.mark.parametrize("workers", [1, 2])
 def test_interrupt_stops_cleanly_and_counts_finished_drops(gem, workers):
     from diefab.physics import SimulationInterrupted
