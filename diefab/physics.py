@@ -84,7 +84,11 @@ class PhysicsSettings:
     time_step : float
         Simulation step, seconds, in (0, 0.05].
     solver_iterations : int
-        Constraint-solver iterations per step (Bullet's default 10).
+        Constraint-solver iterations per step, a fixed number (pybullet's
+        default is up to 50 with an early exit on a residual, which would
+        couple the dice stepped in one world; Bullet's own default is 10).
+        For one die on a plane 5 already give the same distribution as
+        pybullet's defaults (``benchmarks/bench_validate.py``).
     collision_margin : float
         Bullet's collision margin of the die, model units, in [0, 0.1].
     gravity : float
@@ -106,10 +110,11 @@ class PhysicsSettings:
         A die still this long (s) with no face down is cocked (a die
         momentarily balanced on an edge can be still for a short while).
     energy_fraction : float
-        Fast-path early stop: a die resting near face f has landed on f once
-        its kinetic energy plus potential energy above rest is below this
-        fraction of the energy needed to tip over f's lowest edge; 0 turns
-        the early stop off.  In [0, 1).
+        Fast-path early stop: a die whose orientation lies in face f's basin
+        (:class:`diefab.geometry.RestBasins`) has landed on f once its kinetic
+        energy plus potential energy above rest on f is below this fraction
+        of the basin's barrier (its lowest saddle); 0 turns the early stop
+        off.  The rest is a margin for the engine's energy errors.  In [0, 1).
     time_limit : float
         A die still moving after this many seconds is unsettled.
     face_tolerance : float
@@ -122,7 +127,7 @@ class PhysicsSettings:
     rolling_friction: float = 0.0
     spinning_friction: float = 0.0
     time_step: float = 1.0 / 240.0
-    solver_iterations: int = 10
+    solver_iterations: int = 5
     collision_margin: float = 0.001
     gravity: float = 9.81
     drop_height: float = 5.0
@@ -133,7 +138,7 @@ class PhysicsSettings:
     still_spin: float = 0.05
     settle_time: float = 0.1
     cocked_time: float = 1.0
-    energy_fraction: float = 0.5
+    energy_fraction: float = 0.95
     time_limit: float = 20.0
     face_tolerance: float = 3.0
 
