@@ -558,13 +558,15 @@ def _physics_options(func):
         ("--rolling-friction", float, "Rolling friction, >= 0 (default 0)."),
         ("--spinning-friction", float, "Spinning friction, >= 0 (default 0)."),
         ("--time-step", float, "Simulation step, seconds (default 1/240)."),
-        ("--solver-iterations", int, "Constraint-solver iterations per step (default 10)."),
+        ("--solver-iterations", int, "Constraint-solver iterations per step, fixed (default 5)."),
         ("--collision-margin", float, "Collision margin, model units (default 0.001)."),
         ("--drop-height", float, "Initial height of the centre of mass, model units (default 5)."),
         ("--height-jitter", float, "Height is uniform in drop-height +- this (default 0.5)."),
         ("--settle-time", float, "Seconds still on a face to count it (default 0.1)."),
         ("--time-limit", float, "Seconds before a moving die counts as unsettled (default 20)."),
         ("--face-tolerance", float, "Degrees from straight down for a face to count (default 3)."),
+        ("--energy-fraction", float, "Early stop: a die in a face's basin with less than this fraction of "
+         "the basin's barrier in energy has landed; 0 runs every die until still (default 0.95)."),
     ]
     for flag, kind, text in reversed(options):
         func = click.option(flag, type=kind, default=None, help=text)(func)

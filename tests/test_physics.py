@@ -288,6 +288,7 @@ def run_cli(args, capsys):
         ["--friction", "-1"],
         ["--restitution", "1.5"],
         ["--time-step", "0"],
+        ["--energy-fraction", "1"],
         ["--param", "a=nan"],
         ["--param", "c=1.0", "--param", "d=4.0"],
         ["--plot", "chart.gif"],
