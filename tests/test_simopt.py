@@ -214,3 +214,21 @@ def test_unreadable_candidates_are_infeasible_and_not_simulated():
     record = objective(objective.problem.unit(params), 1000)
     assert record["min_margin"] > 0.2
     assert record["objective"] == INFEASIBLE + UNLABELABLE and record["drops"] == 0 and not record["feasible"]
+
+
+def test_cli_run_on_a_dask_cluster_matches_local_workers(tmp_path, capsys):
+    distributed = pytest.importorskip("distributed")
+    args = ["optimize", "fudge-gem", "--model", "simulation", "--start", "design", "--sims-per-eval", "20",
+            "--max-evals", "3", "--json"]  # fmt: skip
+    with pytest.raises(SystemExit) as exc:
+        main([*args, "--workers", "1", "--out", str(tmp_path / "local")])
+    assert exc.value.code == 0
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as lc:
+        with pytest.raises(SystemExit) as exc:
+            main([*args, "--scheduler", lc.scheduler_address, "--out", str(tmp_path / "dask")])
+    assert exc.value.code == 0
+    capsys.readouterr()
+    local = _records(tmp_path / "local" / "fudge-gem-simulation-opt")
+    remote = _records(tmp_path / "dask" / "fudge-gem-simulation-opt")
+    assert [r["face_counts"] for r in local] == [r["face_counts"] for r in remote]
+    assert [r["objective"] for r in local] == [r["objective"] for r in remote]
