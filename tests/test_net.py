@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 
 from diefab import Design, Polyhedron, load_design
-from diefab.cli import main
 from diefab.fabricate.net import design_net, render_net
 from diefab.fabricate.unfold import PAGES, parse_page, unfold
 
@@ -203,11 +202,9 @@ def test_cube_has_eleven_distinct_net_shapes_all_valid():
 # command line
 
 
-def test_cli_writes_files(tmp_path, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(["net", "d6", "--out", str(tmp_path), "--format", "svg,pdf", "--face-names"])
-    assert exc.value.code == 0
-    out = capsys.readouterr().out
+def test_cli_writes_files(tmp_path, run):
+    code, out, err = run("net", "d6", "--out", tmp_path, "--format", "svg,pdf", "--face-names")
+    assert code == 0, err
     assert (tmp_path / "d6-net.svg").is_file() and (tmp_path / "d6-net.pdf").is_file()
     assert "16 mm die" in out
 
@@ -222,22 +219,15 @@ def test_cli_writes_files(tmp_path, capsys):
         (["--format", "svg,gif"], "format"),
     ],
 )
-def test_cli_bad_input(tmp_path, capsys, args, words):
-    with pytest.raises(SystemExit) as exc:
-        main(["net", "fudge-gem", "--out", str(tmp_path / "o"), *args])
-    assert exc.value.code == 2
-    err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1 and words in err
+def test_cli_bad_input(tmp_path, bad, args, words):
+    assert words in bad("net", "fudge-gem", "--out", tmp_path / "o", *args)
     assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
 
 
-def test_cli_unwritable_folder(tmp_path, capsys):
+def test_cli_unwritable_folder(tmp_path, bad):
     blocker = tmp_path / "file"
     blocker.write_text("x")
-    with pytest.raises(SystemExit) as exc:
-        main(["net", "d6", "--out", str(blocker / "sub")])
-    assert exc.value.code == 2
-    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+    bad("net", "d6", "--out", blocker / "sub")
 
 
 def test_size_error_names_a_size_that_works():

@@ -7,7 +7,6 @@ import pytest
 from scipy.spatial.transform import Rotation
 from scipy.stats import chi2
 
-from diefab.cli import main
 from diefab.design import load_design
 from diefab.errors import PhysicsError
 from diefab.physics import PhysicsSettings, RollResult, classify_pose, drop, simulate
@@ -272,12 +271,6 @@ def test_simulate_rejects_bad_arguments(gem):
         simulate(gem.with_params(c=1.0, d=4.0), 10, workers=1)
 
 
-def run_cli(args, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(args)
-    return exc.value.code, capsys.readouterr()
-
-
 @pytest.mark.parametrize(
     "args",
     [
@@ -296,23 +289,19 @@ def run_cli(args, capsys):
         ["--scheduler", "not a scheduler::"],
     ],
 )
-def test_cli_bad_input_is_one_line_exit_2(args, capsys, tmp_path, monkeypatch):
+def test_cli_bad_input_is_one_line_exit_2(args, bad, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    code, out = run_cli(["validate", "fudge-gem", "--sims", "10", "--workers", "1", *args], capsys)
-    assert code == 2
-    assert len(out.err.strip().splitlines()) == 1, out.err
-    assert "Traceback" not in out.err
+    bad("validate", "fudge-gem", "--sims", "10", "--workers", "1", *args)
     assert not list(tmp_path.iterdir())
 
 
-def test_cli_json_and_plot(tmp_path, capsys):
+def test_cli_json_and_plot(tmp_path, run):
     import json
 
     plot = tmp_path / "chart.svg"
-    code, out = run_cli(["validate", "fudge-gem", "--sims", "40", "--workers", "1", "--json", "--plot", str(plot)],
-                        capsys)  # fmt: skip
-    assert code == 0
-    data = json.loads(out.out)
+    code, out, err = run("validate", "fudge-gem", "--sims", "40", "--workers", "1", "--json", "--plot", plot)
+    assert code == 0, err
+    data = json.loads(out)
     keys = "n counts face_counts probabilities cocked unsettled chi2 p_value tvd jsd seconds drops_per_second settings"
     for key in keys.split() + ["intervals", "expected_tvd", "expected_jsd", "solid_angle", "target_probabilities"]:
         assert key in data
@@ -324,16 +313,16 @@ def test_cli_json_and_plot(tmp_path, capsys):
     assert ET.parse(plot).getroot().tag.endswith("svg")
 
 
-def test_cli_interrupt_reports_finished_drops(gem, monkeypatch, capsys):
+def test_cli_interrupt_reports_finished_drops(gem, monkeypatch, run):
     from diefab import physics
 
     def interrupted(*args, **kwargs):
         raise physics.SimulationInterrupted(123, 1000)
 
     monkeypatch.setattr(physics, "simulate", interrupted)
-    code, out = run_cli(["validate", "fudge-gem", "--sims", "1000"], capsys)
+    code, _, err = run("validate", "fudge-gem", "--sims", "1000")
     assert code == 130
-    assert "123 of 1000" in out.err and len(out.err.strip().splitlines()) == 1
+    assert "123 of 1000" in err and len(err.strip().splitlines()) == 1
 
 
 def test_sigterm_stops_validate_cleanly_with_its_workers(tmp_path):

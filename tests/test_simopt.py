@@ -129,15 +129,6 @@ def test_noise_floor():
     assert noise_floor("tvd", 9, 30000) == pytest.approx(np.sqrt(8 / (2 * np.pi * 30000)), rel=0.2)
 
 
-def _fails(capsys, *args):
-    with pytest.raises(SystemExit) as exc:
-        main(list(args))
-    assert exc.value.code == 2
-    err = capsys.readouterr().err.strip()
-    assert len(err.splitlines()) == 1, err
-    return err
-
-
 @pytest.mark.parametrize(
     "extra, text",
     [
@@ -150,29 +141,27 @@ def _fails(capsys, *args):
         (["--objective", "jsd"], "eq2 or tvd"),
     ],
 )
-def test_bad_input(tmp_path, capsys, extra, text):
-    err = _fails(capsys, "optimize", "fudge-gem", "--model", "simulation", "--out", str(tmp_path), *extra)
+def test_bad_input(tmp_path, bad, extra, text):
+    err = bad("optimize", "fudge-gem", "--model", "simulation", "--out", tmp_path, *extra)
     assert text in err
     assert not any(tmp_path.iterdir())
 
 
-def test_resume_from_another_design_or_corrupt_folder(tmp_path, capsys):
+def test_resume_from_another_design_or_corrupt_folder(tmp_path, bad):
     spec = _spec()
     _run(spec, tmp_path / "run", 2)
-    err = _fails(
-        capsys, "optimize", "fudge-gem-solid-angle", "--model", "simulation", "--resume", str(tmp_path / "run")
-    )
+    err = bad("optimize", "fudge-gem-solid-angle", "--model", "simulation", "--resume", tmp_path / "run")
     assert "fudge-gem" in err
     (tmp_path / "empty").mkdir()
-    err = _fails(capsys, "optimize", "fudge-gem", "--model", "simulation", "--resume", str(tmp_path / "empty"))
+    err = bad("optimize", "fudge-gem", "--model", "simulation", "--resume", tmp_path / "empty")
     assert "not a diefab run folder" in err
     path = tmp_path / "run" / "evaluations.jsonl"
     path.write_text("garbage\n" + path.read_text())
-    err = _fails(capsys, "optimize", "fudge-gem", "--model", "simulation", "--resume", str(tmp_path / "run"))
+    err = bad("optimize", "fudge-gem", "--model", "simulation", "--resume", tmp_path / "run")
     assert "line 1" in err
 
 
-def test_cli_run_and_resume(tmp_path, capsys):
+def test_cli_run_and_resume(tmp_path, capsys, bad):
     args = ["optimize", "fudge-gem", "--model", "simulation", "--start", "design", "--sims-per-eval", "20",
             "--workers", "1", "--out", str(tmp_path), "--json"]  # fmt: skip
     with pytest.raises(SystemExit) as exc:
@@ -184,7 +173,7 @@ def test_cli_run_and_resume(tmp_path, capsys):
     best = load_design(run / "fudge-gem-simulation-opt.toml")
     assert best.params == pytest.approx(report["params"])
     # the same folder again without --resume is refused; with it, the run continues
-    _fails(capsys, *args, "--max-evals", "4")
+    bad(*args, "--max-evals", "4")
     with pytest.raises(SystemExit) as exc:
         main([*args, "--max-evals", "5", "--resume", str(run)])
     assert exc.value.code == 0
@@ -192,7 +181,7 @@ def test_cli_run_and_resume(tmp_path, capsys):
     assert report["evaluations"] == 5 and report["replayed"] == 3
     assert len(_records(run)) == 5
     # a different seed cannot continue it
-    err = _fails(capsys, *args, "--seed", "9", "--resume", str(run))
+    err = bad(*args, "--seed", "9", "--resume", run)
     assert "--seed" in err
 
 

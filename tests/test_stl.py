@@ -13,7 +13,6 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from diefab.cli import main
 from diefab.design import load_design
 from diefab.errors import FabricationError
 from diefab.fabricate.stl import (
@@ -278,17 +277,10 @@ def test_bad_settings_raise(gem, kwargs, match):
         build_solid(gem, **kwargs)
 
 
-def _run(argv, capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(argv)
-    out, err = capsys.readouterr()
-    return exc.value.code, out, err
-
-
-def test_cli_writes_stl_and_3mf(tmp_path, capsys):
+def test_cli_writes_stl_and_3mf(tmp_path, run):
     import json
 
-    code, out, err = _run(["stl", "fudge-gem", "--format", "stl,3mf", "--out", str(tmp_path), "--json"], capsys)
+    code, out, err = run("stl", "fudge-gem", "--format", "stl,3mf", "--out", tmp_path, "--json")
     assert code == 0, err
     report = json.loads(out)
     for key in ("file", "volume_mm3", "watertight", "com_shift_mm", "labels", "mass_g"):
@@ -309,37 +301,32 @@ def test_cli_writes_stl_and_3mf(tmp_path, capsys):
         (["--infill", "1.5"], "infill"),
     ],
 )
-def test_cli_bad_input(tmp_path, capsys, args, match):
+def test_cli_bad_input(tmp_path, bad, args, match):
     out_dir = tmp_path / "out"
-    code, _, err = _run(["stl", "fudge-gem", "--out", str(out_dir), *args], capsys)
-    assert code == 2
-    assert len(err.strip().splitlines()) == 1 and match in err
+    assert match in bad("stl", "fudge-gem", "--out", out_dir, *args)
     assert not out_dir.exists() or not any(out_dir.iterdir())
 
 
-def test_cli_unreadable_font_and_unwritable_folder(tmp_path, capsys):
+def test_cli_unreadable_font_and_unwritable_folder(tmp_path, bad):
     bad_font = tmp_path / "font.ttf"
     bad_font.write_bytes(b"not a font")
     out_dir = tmp_path / "out"
-    code, _, err = _run(["stl", "fudge-gem", "--font", str(bad_font), "--out", str(out_dir)], capsys)
-    assert code == 2 and len(err.strip().splitlines()) == 1 and "font" in err
+    assert "font" in bad("stl", "fudge-gem", "--font", bad_font, "--out", out_dir)
     assert not out_dir.exists() or not any(out_dir.iterdir())
     blocker = tmp_path / "file"
     blocker.write_text("x")
-    code, _, err = _run(["stl", "fudge-gem", "--out", str(blocker / "sub")], capsys)
-    assert code == 2 and len(err.strip().splitlines()) == 1
+    bad("stl", "fudge-gem", "--out", blocker / "sub")
     assert blocker.read_text() == "x"
 
 
-def test_cli_label_too_long_names_the_face(tmp_path, capsys):
+def test_cli_label_too_long_names_the_face(tmp_path, bad):
     text = (tmp_path / "long.toml").write_text(
         'name = "long"\nfamily = "gem"\n[params]\na = 1.18\nb = 0.52\nc = 0.72\nd = 1.41\n'
         "[values]\nf1 = 3\nf2 = 4\nf3 = -3\nf4 = -4\nf5 = 0\nf6 = 1\nf7 = 2\nf8 = -1\nf9 = -2\n"
         '[labels]\nf5 = "Fudge dice are great fun"\n'
     )
     assert text > 0
-    code, _, err = _run(["stl", str(tmp_path / "long.toml"), "--out", str(tmp_path / "o")], capsys)
-    assert code == 2 and "face f5" in err and len(err.strip().splitlines()) == 1
+    assert "face f5" in bad("stl", tmp_path / "long.toml", "--out", tmp_path / "o")
     assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
 
 
