@@ -100,12 +100,9 @@ class DieBody:
     heights : (m,) float
         Distance from the centre of mass to each face plane.
     basins : RestBasins or None
-        Which face's basin each orientation lies in, body frame (None for a
-        die that cannot rest on every face: the energy rule is then off).
-    barriers : (m,) float
-        Height the centre of mass must rise, resting on each face, to leave
-        the face's basin (its lowest saddle, :attr:`RestBasins.barriers`);
-        zero when `basins` is None.
+        Which face's basin each orientation lies in and the height the centre
+        of mass must rise to leave it, body frame (None for a die that cannot
+        rest on every face: the energy rule is then off).
     mass : float
     inertia : (3,) float
         Principal moments of inertia.
@@ -119,7 +116,6 @@ class DieBody:
     normals: np.ndarray
     heights: np.ndarray
     basins: RestBasins | None
-    barriers: np.ndarray
     mass: float
     inertia: np.ndarray
     rotation: np.ndarray
@@ -147,8 +143,7 @@ def die_body(poly, mass_props) -> DieBody:
     normals = poly.normals @ axes
     heights = poly.offsets - poly.normals @ center
     basins = RestBasins.of(poly.with_vertices(vertices), np.zeros(3))
-    barriers = np.zeros(len(poly.faces)) if basins is None else basins.barriers
-    return DieBody(vertices, normals, heights, basins, barriers, float(mass_props.mass), moments, axes, center)
+    return DieBody(vertices, normals, heights, basins, float(mass_props.mass), moments, axes, center)
 
 
 # ----------------------------------------------------------------------
@@ -428,10 +423,14 @@ class World:
         cocked_steps = int(np.ceil(s.cocked_time / s.time_step - 1e-9))
         mg = body.mass * s.gravity
         rest = body.heights + s.collision_margin
-        limit = (s.energy_fraction if early else 0.0) * mg * body.barriers
-        ceiling = (mg * rest + limit).max()  # total energy above which no die is trapped
+        basins = body.basins if early and s.energy_fraction > 0 else None  # None: the energy rule is off
+        if basins is not None:
+            limit = s.energy_fraction * mg * basins.barriers
+            ceiling = (mg * rest + limit).max()  # total energy above which no die is trapped
+        else:
+            ceiling = -np.inf
         cos_tol = np.cos(np.radians(s.face_tolerance))
-        half_m, half_i, normals, basins = 0.5 * body.mass, 0.5 * body.inertia, body.normals, body.basins
+        half_m, half_i, normals = 0.5 * body.mass, 0.5 * body.inertia, body.normals
         half_i_min = half_i.min()
         still_speed2, still_spin2 = s.still_speed**2, s.still_spin**2
         p, cid, dice = self.p, self.cid, self.dice
@@ -473,10 +472,13 @@ class World:
             rot = _quat_to_matrix(state[:, 3:7])
             cos = -rot[:, 2, :] @ normals.T  # world -z in body coordinates, against each normal
             face = np.argmax(cos, axis=1)
-            omega = np.einsum("kji,kj->ki", rot, state[:, 10:13])  # body-frame angular velocity
-            energy = half_m * speed2[near] + (half_i * omega * omega).sum(1) + mg * state[:, 2]
-            basin = face if basins is None else basins.lookup(-rot[:, 2, :])
-            trapped = energy - mg * rest[basin] < limit[basin]
+            if basins is None:
+                basin, trapped = face, np.zeros(len(live), dtype=bool)
+            else:
+                omega = np.einsum("kji,kj->ki", rot, state[:, 10:13])  # body-frame angular velocity
+                energy = half_m * speed2[near] + (half_i * omega * omega).sum(1) + mg * state[:, 2]
+                basin = basins.lookup(-rot[:, 2, :])
+                trapped = energy - mg * rest[basin] < limit[basin]
             down = cos[np.arange(len(live)), face] >= cos_tol
             landed = trapped | (down & (still_near >= settle_steps))
             cocked = ~down & (still_near >= cocked_steps)
