@@ -2,11 +2,15 @@
 
 Draws random stable gems in the family's whole box (a, b, c, d and e free),
 drops each in pybullet (:func:`diefab.physics.simulate`, default settings)
-and compares the ``fast`` and ``solid-angle`` models with the simulated
-frequencies by TVD.  Two disjoint sets of designs:
+and compares the ``fast`` model, its physics chain alone and the
+``solid-angle`` model with the simulated frequencies by TVD.  Two disjoint
+sets of designs:
 
 * a **training** set (``--train-designs`` designs, ``--train-drops`` drops
-  each) that ``--calibrate`` fits the fast model's constants on;
+  each).  ``--calibrate`` fits the chain's five constants on its first
+  ``--chain-designs``; ``--learn`` learns the gem discrepancy (what the chain
+  misses) from all of it, with the RBF smoothing chosen by 5-fold
+  cross-validation, and writes ``diefab/data/gem-discrepancy.json``;
 * a **test** set (``--designs`` designs, ``--drops`` drops each, 30,000 by
   default) on which the table and the median TVD are reported.
 
@@ -19,7 +23,8 @@ Usage::
 
     python benchmarks/bench_fastmodel.py                  # full: 20 x 30,000 drops (~10 min on 2 cores)
     python benchmarks/bench_fastmodel.py --drops 2000     # quick look
-    python benchmarks/bench_fastmodel.py --calibrate      # refit the constants on the training set
+    python benchmarks/bench_fastmodel.py --calibrate      # refit the chain's constants (paste them into fastmodel.py)
+    python benchmarks/bench_fastmodel.py --learn          # relearn the gem discrepancy (~20 min to simulate)
 """
 
 from __future__ import annotations
@@ -37,7 +42,11 @@ from diefab.files import atomic_write
 from diefab.stats import tvd
 
 RESULTS = Path(__file__).with_name("results") / "fastmodel.json"
+DISCREPANCY = Path(__file__).resolve().parents[1] / "diefab" / "data"
 TRAIN_SEED, TEST_SEED = 101, 202
+#: RBF smoothing values the cross-validation of ``--learn`` chooses from.
+SMOOTHING = (1e-4, 1e-3, 1e-2, 1e-1)
+FOLDS = 5
 #: Random designs must rest on every face with at least this margin (model units).
 MIN_MARGIN = 0.02
 
@@ -124,17 +133,80 @@ def simulated(designs, drops: int, seed: int, which: str, cache: dict, workers: 
     return out
 
 
+def frequencies(runs) -> np.ndarray:
+    """(n, m) simulated landing frequencies per face (cocked drops excluded)."""
+    counts = np.array([r["face_counts"] for r in runs], dtype=float)
+    return counts / counts.sum(axis=1, keepdims=True)
+
+
+def chain_probabilities(designs) -> np.ndarray:
+    """(n, m) the chain model (no discrepancy) at each design."""
+    from diefab.fastmodel import landing_probabilities
+
+    return np.array([landing_probabilities(d.polyhedron, d.mass_properties().center) for d in designs])
+
+
+def learn(designs, runs, drops: int, seed: int) -> dict:
+    """Learn the gem discrepancy from the training set and write it into the package.
+
+    The smoothing is the one of :data:`SMOOTHING` with the least mean TVD in
+    5-fold cross-validation (fixed folds), each fold learning from the others.
+    """
+    from diefab import fastmodel
+    from diefab.physics import PhysicsSettings
+
+    points = np.array([[d.params[n] for n in "abcde"] for d in designs])
+    q, p = frequencies(runs), chain_probabilities(designs)
+    margins = np.array([d.margins() for d in designs])
+    folds = np.random.default_rng(0).permutation(len(designs)) % FOLDS
+    scores = {}
+    for smoothing in SMOOTHING:
+        err = np.empty(len(designs))
+        for k in range(FOLDS):
+            train = folds != k
+            fit = fastmodel.Discrepancy.learn(
+                points[train], margins[train], p[train], q[train], smoothing=smoothing
+            )
+            for i in np.flatnonzero(folds == k):
+                err[i] = tvd(fit.correct(p[i], dict(zip("abcde", points[i])), margins[i]), q[i])
+        scores[smoothing] = (float(np.median(err)), float(np.mean(err)))
+        print(f"  smoothing {smoothing:g}: {FOLDS}-fold CV TVD median {scores[smoothing][0]:.4f} "
+              f"mean {scores[smoothing][1]:.4f}", file=sys.stderr, flush=True)  # fmt: skip
+    best = min(scores, key=lambda k: scores[k][1])
+    names = ("temperature", "tau", "area_power", "roll_power", "height_weight")
+    chain = {k: getattr(fastmodel, k.upper()) for k in names}
+    info = {
+        "designs": len(designs),
+        "design_seed": TRAIN_SEED,
+        "min_margin": MIN_MARGIN,
+        "drops": drops,
+        "seed": seed,
+        "physics": physics_version(),
+        "settings": PhysicsSettings().as_dict(),
+        "chain": chain,
+        "cv": {f"{k:g}": {"median_tvd": round(v[0], 5), "mean_tvd": round(v[1], 5)} for k, v in scores.items()},
+    }
+    fit = fastmodel.Discrepancy.learn(points, margins, p, q, smoothing=best, info=info)
+    atomic_write(DISCREPANCY / fastmodel.DISCREPANCY_FILE, fit.to_json())
+    fastmodel.gem_discrepancy.cache_clear()
+    return {"smoothing": best, "cv_median_tvd": scores[best][0], "cv_mean_tvd": scores[best][1]}
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--designs", type=int, default=20, help="test designs")
     ap.add_argument("--drops", type=int, default=30_000, help="drops per test design")
-    ap.add_argument("--train-designs", type=int, default=20)
+    ap.add_argument("--train-designs", type=int, default=800)
     ap.add_argument("--train-drops", type=int, default=4_000)
+    ap.add_argument("--chain-designs", type=int, default=20, help="training designs --calibrate fits the chain on")
     ap.add_argument("--seed", type=int, default=0, help="physics seed of the drops")
     ap.add_argument("--workers", type=int, default=None)
-    ap.add_argument("--calibrate", action="store_true", help="refit the fast model's constants on the training set")
+    ap.add_argument("--calibrate", action="store_true", help="refit the chain's five constants (prints them)")
+    ap.add_argument("--learn", action="store_true", help="relearn the gem discrepancy from the training set")
     ap.add_argument("--collect-only", action="store_true", help="simulate (fill the cache) and stop")
     args = ap.parse_args(argv)
+    if args.calibrate and args.learn:
+        ap.error("--calibrate prints constants to paste into fastmodel.py; --learn afterwards, in a second run")
 
     cache = load_cache()
     train = random_designs(args.train_designs, TRAIN_SEED)
@@ -148,50 +220,48 @@ def main(argv=None) -> None:
     from diefab import fastmodel
     from diefab.models import MODELS
 
+    constants = None
     if args.calibrate:
-        fit = fastmodel.calibrate(train, [np.array(r["face_counts"]) for r in train_runs])
-        print(f"calibrated on {len(train)} training designs x {args.train_drops} drops: {fit}")
+        k = args.chain_designs
+        fit = fastmodel.calibrate(train[:k], [np.array(r["face_counts"]) for r in train_runs[:k]])
+        print(f"calibrated the chain on {k} training designs x {args.train_drops} drops: {fit}")
         constants = {k: v for k, v in fit.items() if k != "mean_tvd"}
-    else:
-        constants = None
+    if args.learn:
+        fit = learn(train, train_runs, args.train_drops, args.seed)
+        print(f"learned the gem discrepancy from {len(train)} training designs x {args.train_drops} drops: {fit}")
 
-    def fast(poly, center):
-        return (
-            fastmodel.fast_model(poly, center)
-            if constants is None
-            else fastmodel.landing_probabilities(poly, center, **constants)
-        )
+    def chain(poly, center):
+        return fastmodel.landing_probabilities(poly, center, **(constants or {}))
 
     rows = []
-    for d, r in zip(test, test_runs):
-        counts = np.array(r["face_counts"], dtype=float)
-        q = counts / counts.sum()
+    for d, q in zip(test, frequencies(test_runs)):
         poly, center = d.polyhedron, d.mass_properties().center
-        rows.append((d, r, tvd(fast(poly, center), q), tvd(MODELS["solid-angle"](poly, center), q)))
+        rows.append([tvd(fn(poly, center), q) for fn in (MODELS["fast"], chain, MODELS["solid-angle"])])
+    rows = np.array(rows)
 
-    print(f"\nfast model vs solid angles against {args.drops}-drop simulations ({len(test)} random stable gems, "
-          f"physics seed {args.seed}; training set: {len(train)} other gems x {args.train_drops} drops)")  # fmt: skip
+    print(f"\nfast model, its chain alone and solid angles against {args.drops}-drop simulations "
+          f"({len(test)} random stable gems, physics seed {args.seed}; "
+          f"training set: {len(train)} other gems x {args.train_drops} drops)")  # fmt: skip
     print(f"{'#':>3} {'a':>6} {'b':>6} {'c':>6} {'d':>6} {'e':>6} {'margin':>7} {'cocked':>7}  {'TVD fast':>9} "
-          f"{'TVD solid':>9}")  # fmt: skip
-    for i, (d, r, tf, ts) in enumerate(rows):
+          f"{'chain':>7} {'solid':>7}")  # fmt: skip
+    for i, (d, r, (tf, tc, ts)) in enumerate(zip(test, test_runs, rows)):
         p = d.params
         print(f"{i:3d} {p['a']:6.3f} {p['b']:6.3f} {p['c']:6.3f} {p['d']:6.3f} {p['e']:6.3f} "
-              f"{d.margins().min():7.3f} {r['cocked'] / r['drops']:7.2%}  {tf:9.4f} {ts:9.4f}")  # fmt: skip
-    tf = np.array([x[2] for x in rows])
-    ts = np.array([x[3] for x in rows])
+              f"{d.margins().min():7.3f} {r['cocked'] / r['drops']:7.2%}  {tf:9.4f} {tc:7.4f} {ts:7.4f}")  # fmt: skip
+    med, worst = np.median(rows, axis=0), rows.max(axis=0)
     noise = np.sqrt((9 - 1) / (2 * np.pi * args.drops))
-    ratio = np.median(ts) / np.median(tf)
-    print(f"median TVD: fast {np.median(tf):.4f}, solid-angle {np.median(ts):.4f} (ratio {ratio:.1f}x); "
-          f"max: fast {tf.max():.4f}, solid-angle {ts.max():.4f}; sampling noise alone ~{noise:.4f}")  # fmt: skip
-    # training-set fit, for comparison
-    tr = [tvd(fast(d.polyhedron, d.mass_properties().center), np.array(r["face_counts"]) / sum(r["face_counts"]))
-          for d, r in zip(train, train_runs)]  # fmt: skip
-    print(f"training set median TVD (fast): {np.median(tr):.4f}")
+    print(f"median TVD: fast {med[0]:.4f}, chain alone {med[1]:.4f}, solid-angle {med[2]:.4f} "
+          f"(solid-angle / fast {med[2] / med[0]:.1f}x); max: fast {worst[0]:.4f}, chain {worst[1]:.4f}, "
+          f"solid-angle {worst[2]:.4f}; sampling noise alone ~{noise:.4f}")  # fmt: skip
+    cv = fastmodel.gem_discrepancy().info.get("cv", {}).get(f"{fastmodel.gem_discrepancy().smoothing:g}")
+    if cv:
+        print(f"gem discrepancy: {FOLDS}-fold CV on the training set, median TVD {cv['median_tvd']:.4f} "
+              f"(at {args.train_drops} drops, noise included)")  # fmt: skip
 
     # speed, against the solid-angle model in the same run
     d = load_design("fudge-gem")
     poly, center = d.polyhedron, d.mass_properties().center
-    for name, fn in (("fast", fast), ("solid-angle", MODELS["solid-angle"])):
+    for name, fn in (("fast", MODELS["fast"]), ("chain", chain), ("solid-angle", MODELS["solid-angle"])):
         fn(poly, center)
         reps = 300
         t = time.perf_counter()

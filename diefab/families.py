@@ -25,7 +25,16 @@ import numpy as np
 from .errors import DesignError, GeometryError
 from .geometry import Polyhedron
 
-__all__ = ["GEM", "Family", "Parameter", "family", "gem_center_of_mass_y", "gem_polyhedron", "gem_vertices"]
+__all__ = [
+    "GEM",
+    "Family",
+    "Parameter",
+    "family",
+    "gem_center_of_mass_y",
+    "gem_parameters",
+    "gem_polyhedron",
+    "gem_vertices",
+]
 
 
 @dataclass(frozen=True)
@@ -161,3 +170,27 @@ def gem_polyhedron(params: Mapping[str, float]) -> Polyhedron:
         return _GEM_TEMPLATE.with_vertices(gem_vertices(**params))
     except GeometryError as exc:
         raise DesignError(f"gem parameters {dict(params)} do not give a convex die: {exc}") from exc
+
+
+def gem_parameters(poly: Polyhedron) -> dict[str, float] | None:
+    """The gem parameters a, b, c, d, e of `poly`, or None when it is not a gem.
+
+    A gem is recognized by its topology (the paper's nine faces, as
+    :func:`gem_polyhedron` builds them) and by vertices that are exactly
+    :func:`gem_vertices` of the parameters read off them; parameters outside
+    the family box are still returned.
+
+    Examples
+    --------
+    >>> gem_parameters(gem_polyhedron({"a": 1.18, "b": 0.52, "c": 0.72, "d": 1.41}))["e"]
+    0.6136
+    """
+    if poly.faces is not _GEM_TEMPLATE.faces and (
+        len(poly.faces) != len(_GEM_FACES) or not all(np.array_equal(f, g) for f, g in zip(poly.faces, _GEM_FACES))
+    ):
+        return None
+    v = poly.vertices
+    params = {"a": float(v[1, 0]), "b": float(-v[4, 2]), "c": float(v[4, 1]), "d": float(-v[8, 1]), "e": float(v[5, 0])}
+    if not np.array_equal(v, gem_vertices(**params)):
+        return None
+    return params
