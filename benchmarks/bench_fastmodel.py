@@ -23,6 +23,7 @@ Usage::
 
     python benchmarks/bench_fastmodel.py                  # full: 20 x 30,000 drops (~10 min on 2 cores)
     python benchmarks/bench_fastmodel.py --drops 2000     # quick look
+    python benchmarks/bench_fastmodel.py --test-seed 303  # the second, never-fitted test set
     python benchmarks/bench_fastmodel.py --calibrate      # refit the chain's constants (paste them into fastmodel.py)
     python benchmarks/bench_fastmodel.py --learn          # relearn the gem discrepancy (~20 min to simulate)
 """
@@ -196,6 +197,7 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--designs", type=int, default=20, help="test designs")
     ap.add_argument("--drops", type=int, default=30_000, help="drops per test design")
+    ap.add_argument("--test-seed", type=int, default=TEST_SEED, help="design seed of the test set")
     ap.add_argument("--train-designs", type=int, default=800)
     ap.add_argument("--train-drops", type=int, default=4_000)
     ap.add_argument("--chain-designs", type=int, default=20, help="training designs --calibrate fits the chain on")
@@ -210,9 +212,10 @@ def main(argv=None) -> None:
 
     cache = load_cache()
     train = random_designs(args.train_designs, TRAIN_SEED)
-    test = random_designs(args.designs, TEST_SEED)
+    test = random_designs(args.designs, args.test_seed)
     train_runs = simulated(train, args.train_drops, args.seed, "train", cache, args.workers)
-    test_runs = simulated(test, args.drops, args.seed, "test", cache, args.workers)
+    which = "test" if args.test_seed == TEST_SEED else f"test-{args.test_seed}"
+    test_runs = simulated(test, args.drops, args.seed, which, cache, args.workers)
     save_cache(cache)
     if args.collect_only:
         return
@@ -240,7 +243,7 @@ def main(argv=None) -> None:
     rows = np.array(rows)
 
     print(f"\nfast model, its chain alone and solid angles against {args.drops}-drop simulations "
-          f"({len(test)} random stable gems, physics seed {args.seed}; "
+          f"({len(test)} random stable gems, design seed {args.test_seed}, physics seed {args.seed}; "
           f"training set: {len(train)} other gems x {args.train_drops} drops)")  # fmt: skip
     print(f"{'#':>3} {'a':>6} {'b':>6} {'c':>6} {'d':>6} {'e':>6} {'margin':>7} {'cocked':>7}  {'TVD fast':>9} "
           f"{'chain':>7} {'solid':>7}")  # fmt: skip
