@@ -14,18 +14,19 @@ sets of designs:
 * a **test** set (``--designs`` designs, ``--drops`` drops each, 30,000 by
   default) on which the table and the median TVD are reported.
 
-Simulated counts are cached in ``benchmarks/results/fastmodel.json`` (a few
-kilobytes: nine counts per design), keyed by parameters, drops, seed and
+Simulated counts are cached in ``benchmarks/results/fastmodel.json`` (about
+600 bytes per design), keyed by parameters, drops, seed and
 physics settings, so a rerun only simulates what is missing and an
 interrupted run loses at most the design in flight.
 
 Usage::
 
-    python benchmarks/bench_fastmodel.py                  # full: 20 x 30,000 drops (~10 min on 2 cores)
+    python benchmarks/bench_fastmodel.py                  # full: 20 x 30,000 drops (~3 min on 2 cores)
     python benchmarks/bench_fastmodel.py --drops 2000     # quick look
     python benchmarks/bench_fastmodel.py --test-seed 303  # the second, never-fitted test set
     python benchmarks/bench_fastmodel.py --calibrate      # refit the chain's constants (paste them into fastmodel.py)
     python benchmarks/bench_fastmodel.py --learn          # relearn the gem discrepancy (~20 min to simulate)
+    python benchmarks/bench_fastmodel.py --ablation       # its coordinates and training size, cross-validated
 """
 
 from __future__ import annotations
@@ -46,7 +47,7 @@ RESULTS = Path(__file__).with_name("results") / "fastmodel.json"
 DISCREPANCY = Path(__file__).resolve().parents[1] / "diefab" / "data"
 TRAIN_SEED, TEST_SEED = 101, 202
 #: RBF smoothing values the cross-validation of ``--learn`` chooses from.
-SMOOTHING = (1e-4, 1e-3, 1e-2, 1e-1)
+SMOOTHING = (1e-4, 1e-3, 1e-2, 1e-1, 1.0)
 FOLDS = 5
 #: Random designs must rest on every face with at least this margin (model units).
 MIN_MARGIN = 0.02
@@ -147,50 +148,99 @@ def chain_probabilities(designs) -> np.ndarray:
     return np.array([landing_probabilities(d.polyhedron, d.mass_properties().center) for d in designs])
 
 
-def learn(designs, runs, drops: int, seed: int) -> dict:
+class TrainingSet:
+    """The training designs with what the discrepancy is learned from."""
+
+    def __init__(self, designs, runs):
+        self.designs = designs
+        self.points = np.array([[d.params[n] for n in "abcde"] for d in designs])
+        self.q, self.p = frequencies(runs), chain_probabilities(designs)
+        self.margins = np.array([d.margins() for d in designs])
+
+    def cross_validate(self, n: int | None = None, distances: bool = False, **kw):
+        """(n,) held-out TVD of each of the first `n` designs, 5-fold (fixed folds), learning with `kw`.
+
+        With `distances`, also each design's distance to the nearest design of the other folds.
+        """
+        from diefab.fastmodel import Discrepancy
+
+        n = len(self.designs) if n is None else n
+        folds = np.random.default_rng(0).permutation(n) % FOLDS
+        err, near = np.empty(n), np.empty(n)
+        for k in range(FOLDS):
+            train = np.flatnonzero(folds != k)
+            fit = Discrepancy.learn(self.points[train], self.margins[train], self.p[train], self.q[train], **kw)
+            for i in np.flatnonzero(folds == k):
+                params = dict(zip("abcde", self.points[i]))
+                err[i] = tvd(fit.correct(self.p[i], params, self.margins[i]), self.q[i])
+                near[i] = fit.distance(params, self.margins[i], self.p[i]) if distances else np.nan
+        return (err, near) if distances else err
+
+    def learn(self, **kw):
+        from diefab.fastmodel import Discrepancy
+
+        return Discrepancy.learn(self.points, self.margins, self.p, self.q, **kw)
+
+
+def learn(training: TrainingSet, drops: int, seed: int) -> dict:
     """Learn the gem discrepancy from the training set and write it into the package.
 
-    The smoothing is the one of :data:`SMOOTHING` with the least mean TVD in
-    5-fold cross-validation (fixed folds), each fold learning from the others.
+    The smoothing is chosen from :data:`SMOOTHING` by 5-fold cross-validation
+    (fixed folds, each fold learning from the others): the largest whose mean
+    held-out TVD is within 1 % of the least (more smoothing, same accuracy).
     """
     from diefab import fastmodel
     from diefab.physics import PhysicsSettings
 
-    points = np.array([[d.params[n] for n in "abcde"] for d in designs])
-    q, p = frequencies(runs), chain_probabilities(designs)
-    margins = np.array([d.margins() for d in designs])
-    folds = np.random.default_rng(0).permutation(len(designs)) % FOLDS
     scores = {}
     for smoothing in SMOOTHING:
-        err = np.empty(len(designs))
-        for k in range(FOLDS):
-            train = folds != k
-            fit = fastmodel.Discrepancy.learn(
-                points[train], margins[train], p[train], q[train], smoothing=smoothing
-            )
-            for i in np.flatnonzero(folds == k):
-                err[i] = tvd(fit.correct(p[i], dict(zip("abcde", points[i])), margins[i]), q[i])
+        err = training.cross_validate(smoothing=smoothing)
         scores[smoothing] = (float(np.median(err)), float(np.mean(err)))
         print(f"  smoothing {smoothing:g}: {FOLDS}-fold CV TVD median {scores[smoothing][0]:.4f} "
               f"mean {scores[smoothing][1]:.4f}", file=sys.stderr, flush=True)  # fmt: skip
-    best = min(scores, key=lambda k: scores[k][1])
+    least = min(v[1] for v in scores.values())
+    best = max(k for k, v in scores.items() if v[1] <= 1.01 * least)
     names = ("temperature", "tau", "area_power", "roll_power", "height_weight")
-    chain = {k: getattr(fastmodel, k.upper()) for k in names}
     info = {
-        "designs": len(designs),
+        "designs": len(training.designs),
         "design_seed": TRAIN_SEED,
         "min_margin": MIN_MARGIN,
         "drops": drops,
         "seed": seed,
         "physics": physics_version(),
         "settings": PhysicsSettings().as_dict(),
-        "chain": chain,
+        "chain": {k: getattr(fastmodel, k.upper()) for k in names},
         "cv": {f"{k:g}": {"median_tvd": round(v[0], 5), "mean_tvd": round(v[1], 5)} for k, v in scores.items()},
     }
-    fit = fastmodel.Discrepancy.learn(points, margins, p, q, smoothing=best, info=info)
-    atomic_write(DISCREPANCY / fastmodel.DISCREPANCY_FILE, fit.to_json())
+    atomic_write(DISCREPANCY / fastmodel.DISCREPANCY_FILE, training.learn(smoothing=best, info=info).to_json())
     fastmodel.gem_discrepancy.cache_clear()
     return {"smoothing": best, "cv_median_tvd": scores[best][0], "cv_mean_tvd": scores[best][1]}
+
+
+def ablation(training: TrainingSet, test, test_q) -> None:
+    """Cross-validated TVD by coordinates and training-set size; the test set with the parameters alone."""
+    from diefab import fastmodel
+
+    smoothing = fastmodel.gem_discrepancy().smoothing
+    print(f"\nablation ({FOLDS}-fold CV on the training set at its drops, noise included; smoothing {smoothing:g})")
+    print(f"{'coordinates':<28} {'designs':>7} {'median':>7} {'mean':>7}")
+    for physics, label in ((False, "parameters"), (True, "parameters + margins, chain")):
+        for n in (200, 400, len(training.designs)):
+            err = training.cross_validate(n, smoothing=smoothing, physics_coordinates=physics)
+            print(f"{label:<28} {n:7d} {np.median(err):7.4f} {err.mean():7.4f}")
+    err, near = training.cross_validate(smoothing=smoothing, distances=True)
+    chain = np.array([tvd(p, q) for p, q in zip(training.p, training.q)])
+    lo, hi = np.quantile(near, [1 / 8, 7 / 8])
+    print(f"held-out gems by distance to their nearest training gem: nearest eighth (<= {lo:.3f}) median TVD "
+          f"{np.median(err[near <= lo]):.4f}; farthest eighth (>= {hi:.3f}) {np.median(err[near >= hi]):.4f}, "
+          f"chain alone there {np.median(chain[near >= hi]):.4f}")  # fmt: skip
+    shape = training.learn(smoothing=smoothing, physics_coordinates=False)
+    err = []
+    for d, q in zip(test, test_q):
+        c = d.mass_properties().center
+        p = fastmodel.landing_probabilities(d.polyhedron, c)
+        err.append(tvd(shape.correct(p, d.params, d.margins()), q))
+    print(f"test set with the parameters alone as coordinates: median TVD {np.median(err):.4f}, max {max(err):.4f}")
 
 
 def main(argv=None) -> None:
@@ -205,13 +255,18 @@ def main(argv=None) -> None:
     ap.add_argument("--workers", type=int, default=None)
     ap.add_argument("--calibrate", action="store_true", help="refit the chain's five constants (prints them)")
     ap.add_argument("--learn", action="store_true", help="relearn the gem discrepancy from the training set")
+    ap.add_argument("--ablation", action="store_true", help="cross-validate the discrepancy's coordinates and size")
     ap.add_argument("--collect-only", action="store_true", help="simulate (fill the cache) and stop")
     args = ap.parse_args(argv)
-    if args.calibrate and args.learn:
+    if args.calibrate and (args.learn or args.ablation):
         ap.error("--calibrate prints constants to paste into fastmodel.py; --learn afterwards, in a second run")
 
     cache = load_cache()
-    train = random_designs(args.train_designs, TRAIN_SEED)
+    # the training set is simulated only when it is used
+    if args.learn or args.ablation or args.collect_only:
+        train = random_designs(args.train_designs, TRAIN_SEED)
+    else:
+        train = random_designs(args.chain_designs, TRAIN_SEED) if args.calibrate else []
     test = random_designs(args.designs, args.test_seed)
     train_runs = simulated(train, args.train_drops, args.seed, "train", cache, args.workers)
     which = "test" if args.test_seed == TEST_SEED else f"test-{args.test_seed}"
@@ -223,48 +278,62 @@ def main(argv=None) -> None:
     from diefab import fastmodel
     from diefab.models import MODELS
 
-    constants = None
+    constants = {}
     if args.calibrate:
-        k = args.chain_designs
-        fit = fastmodel.calibrate(train[:k], [np.array(r["face_counts"]) for r in train_runs[:k]])
-        print(f"calibrated the chain on {k} training designs x {args.train_drops} drops: {fit}")
+        fit = fastmodel.calibrate(train, [np.array(r["face_counts"]) for r in train_runs])
+        print(f"calibrated the chain on {len(train)} training designs x {args.train_drops} drops: {fit}")
         constants = {k: v for k, v in fit.items() if k != "mean_tvd"}
+    training = TrainingSet(train, train_runs) if (args.learn or args.ablation) else None
     if args.learn:
-        fit = learn(train, train_runs, args.train_drops, args.seed)
+        fit = learn(training, args.train_drops, args.seed)
         print(f"learned the gem discrepancy from {len(train)} training designs x {args.train_drops} drops: {fit}")
 
     def chain(poly, center):
-        return fastmodel.landing_probabilities(poly, center, **(constants or {}))
+        return fastmodel.landing_probabilities(poly, center, **constants)
 
-    rows = []
+    # with new chain constants the packaged discrepancy (learned against the old chain) does not apply
+    models = {"fast": MODELS["fast"], "chain": chain, "solid": MODELS["solid-angle"]}
+    if args.calibrate:
+        del models["fast"]
+    found = fastmodel.gem_discrepancy()
+    rows, near = [], []
     for d, q in zip(test, frequencies(test_runs)):
         poly, center = d.polyhedron, d.mass_properties().center
-        rows.append([tvd(fn(poly, center), q) for fn in (MODELS["fast"], chain, MODELS["solid-angle"])])
+        rows.append([tvd(fn(poly, center), q) for fn in models.values()])
+        near.append(found.distance(d.params, d.margins(), fastmodel.landing_probabilities(poly, center)))
     rows = np.array(rows)
 
-    print(f"\nfast model, its chain alone and solid angles against {args.drops}-drop simulations "
+    info = found.info
+    print(f"\n{', '.join(models)} against {args.drops}-drop simulations "
           f"({len(test)} random stable gems, design seed {args.test_seed}, physics seed {args.seed}; "
-          f"training set: {len(train)} other gems x {args.train_drops} drops)")  # fmt: skip
-    print(f"{'#':>3} {'a':>6} {'b':>6} {'c':>6} {'d':>6} {'e':>6} {'margin':>7} {'cocked':>7}  {'TVD fast':>9} "
-          f"{'chain':>7} {'solid':>7}")  # fmt: skip
-    for i, (d, r, (tf, tc, ts)) in enumerate(zip(test, test_runs, rows)):
+          f"discrepancy learned from {info['designs']} other gems x {info['drops']} drops)")  # fmt: skip
+    print(f"{'#':>3} {'a':>6} {'b':>6} {'c':>6} {'d':>6} {'e':>6} {'margin':>7} {'cocked':>7} {'nearest':>7}  "
+          + " ".join(f"{'TVD ' + m if i == 0 else m:>9}" for i, m in enumerate(models)))  # fmt: skip
+    for i, (d, r, row) in enumerate(zip(test, test_runs, rows)):
         p = d.params
         print(f"{i:3d} {p['a']:6.3f} {p['b']:6.3f} {p['c']:6.3f} {p['d']:6.3f} {p['e']:6.3f} "
-              f"{d.margins().min():7.3f} {r['cocked'] / r['drops']:7.2%}  {tf:9.4f} {tc:7.4f} {ts:7.4f}")  # fmt: skip
+              f"{d.margins().min():7.3f} {r['cocked'] / r['drops']:7.2%} {near[i]:7.3f}  "
+              + " ".join(f"{t:9.4f}" for t in row))  # fmt: skip
     med, worst = np.median(rows, axis=0), rows.max(axis=0)
     noise = np.sqrt((9 - 1) / (2 * np.pi * args.drops))
-    print(f"median TVD: fast {med[0]:.4f}, chain alone {med[1]:.4f}, solid-angle {med[2]:.4f} "
-          f"(solid-angle / fast {med[2] / med[0]:.1f}x); max: fast {worst[0]:.4f}, chain {worst[1]:.4f}, "
-          f"solid-angle {worst[2]:.4f}; sampling noise alone ~{noise:.4f}")  # fmt: skip
-    cv = fastmodel.gem_discrepancy().info.get("cv", {}).get(f"{fastmodel.gem_discrepancy().smoothing:g}")
-    if cv:
-        print(f"gem discrepancy: {FOLDS}-fold CV on the training set, median TVD {cv['median_tvd']:.4f} "
-              f"(at {args.train_drops} drops, noise included)")  # fmt: skip
+    print("median TVD: " + ", ".join(f"{m} {v:.4f}" for m, v in zip(models, med))
+          + "; max: " + ", ".join(f"{m} {v:.4f}" for m, v in zip(models, worst))
+          + f"; sampling noise alone ~{noise:.4f}")  # fmt: skip
+    if not args.calibrate:
+        print(f"solid angles / fast {med[2] / med[0]:.1f}x, chain alone / fast {med[1] / med[0]:.1f}x (medians); "
+              f"'nearest': distance to the nearest training gem in the discrepancy's coordinates")  # fmt: skip
+        cv = info.get("cv", {}).get(f"{found.smoothing:g}")
+        if cv:
+            print(f"gem discrepancy: smoothing {found.smoothing:g}, {FOLDS}-fold CV on the training set: "
+                  f"median TVD {cv['median_tvd']:.4f}, mean {cv['mean_tvd']:.4f} "
+                  f"(at {info['drops']} drops, noise included)")  # fmt: skip
+    if args.ablation:
+        ablation(training, test, frequencies(test_runs))
 
     # speed, against the solid-angle model in the same run
     d = load_design("fudge-gem")
     poly, center = d.polyhedron, d.mass_properties().center
-    for name, fn in (("fast", MODELS["fast"]), ("chain", chain), ("solid-angle", MODELS["solid-angle"])):
+    for name, fn in models.items():
         fn(poly, center)
         reps = 300
         t = time.perf_counter()

@@ -45,14 +45,14 @@ solid stays uniform and mirror-image faces stay equal.
 
 This chain applies to any convex die, but it is coarse: its error against
 pybullet varies with the shape in ways no per-face geometric term captured
-(a median TVD of 0.042 on random gems).  For the gem family the error is
+(a median TVD of 0.04-0.06 on random gems).  For the gem family the error is
 learned as well:
 
 4. **the gem discrepancy** (:class:`Discrepancy`): simulated frequencies
-   minus the chain's probabilities at 800 random stable gems, interpolated
-   by a smoothed thin-plate spline over the parameters and the chain's own
-   margins and probabilities, are added to the chain's probabilities
-   (:func:`fast_model`).  The model of the physics
+   minus the chain's probabilities at random stable gems (800 in the
+   packaged data), interpolated by a smoothed thin-plate spline over the
+   parameters and the chain's own margins and probabilities, are added to
+   the chain's probabilities (:func:`fast_model`).  The model of the physics
    *is* then partly a surrogate of the simulator, for the gem family only;
    other dice get the chain alone.
 
@@ -72,10 +72,10 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cache, cached_property
 from importlib import resources
-from pathlib import Path
 
 import numpy as np
 
+from .errors import DesignError
 from .families import GEM, gem_parameters
 from .geometry import Polyhedron, face_margins, solid_angles
 
@@ -98,14 +98,15 @@ __all__ = [
 # Calibrated constants.  Fitted by
 #     python benchmarks/bench_fastmodel.py --calibrate
 # which minimizes the mean TVD to pybullet (default PhysicsSettings, 4,000
-# drops each, physics seed 0) over 20 random stable gems drawn uniformly in
-# the box of a, b, c, d and e (design seed 101), with adaptive Nelder--Mead
-# (see :func:`calibrate`); the fit reached a mean TVD of 0.0571 on that
-# training set.  The rolling term was chosen by 5-fold cross-validation over
-# the training designs only (mean held-out TVD 0.0649 against 0.0673 without
-# it).  On 20 *other* random gems at 30,000 drops each (design seed 202) the
-# chain alone has a median TVD of 0.042 (solid angles 0.177) at about 0.35 ms
-# per evaluation; with the gem discrepancy (below) the fast model has 0.013.
+# drops each, physics seed 0) over the first 20 random stable gems of the
+# training set, drawn uniformly in the box of a, b, c, d and e (design seed
+# 101), with adaptive Nelder--Mead (see :func:`calibrate`); the fit reached a
+# mean TVD of 0.0571 on those gems.  The rolling term was chosen by 5-fold
+# cross-validation over those training designs only (mean held-out TVD
+# 0.0649 against 0.0673 without it, on the gems as simulated by the previous
+# physics version).  On 20 *other* random gems at 30,000 drops each (design
+# seed 202) the chain alone has a median TVD of 0.042 (solid angles 0.177),
+# at about 0.35 ms per evaluation; on 20 more (design seed 303) 0.064.
 #: Energy scale of the tumbling, model units of height.
 TEMPERATURE = 0.0481
 #: How long the tumbling lasts, in units of the rate at zero barrier.
@@ -289,7 +290,10 @@ def fast_model(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
 
     The chain model (:func:`landing_probabilities`) for every die; for a gem
     inside the family box, corrected by the gem family's learned
-    discrepancy (:func:`gem_discrepancy`).
+    discrepancy (:func:`gem_discrepancy`).  A gem is recognized by
+    :func:`~diefab.families.gem_parameters`: built by the gem family, not the
+    same shape given as a ``convex`` or ``mesh`` design, which gets the chain
+    alone.
     """
     p = landing_probabilities(poly, center)
     params = gem_parameters(poly)
@@ -324,11 +328,18 @@ class Discrepancy:
     The interpolation coordinates are the parameters, scaled to the unit
     box, together with the physics the chain already computes: each mirror
     class's stability margin and chain probability, scaled to [0, 1] over
-    the training designs.  The residual changes fastest where a face is
-    barely stable, and there the margins pull apart designs that the
-    parameters alone would call neighbours (cross-validated TVD 0.020
-    against 0.024 from the parameters alone).  The interpolant is linear in
-    the residuals, so it keeps mirror-image faces exactly equal.
+    the training designs (``physics_coordinates=False``: the parameters
+    alone).  The residual changes fastest where a face is barely stable, and
+    there the margins pull apart designs that the parameters alone would call
+    neighbors (``bench_fastmodel.py --ablation`` compares the two).  The
+    interpolant is linear in the residuals, so mirror-image faces stay equal
+    (to rounding).
+
+    Every training design rests on every face with a margin of at least
+    ``margins.min()``; a design with a smaller margin lies outside what was
+    learned, so the correction fades out linearly as its smallest margin goes
+    from that floor to 0, and a design with an unstable face gets the chain
+    alone.
 
     Attributes
     ----------
@@ -338,13 +349,16 @@ class Discrepancy:
         The family box; outside it no correction is applied.
     points : (n, k) float
         Parameters of the training designs.
-    margins, chain : (n, m) float
+    margins, chain : (n, 9) float
         Stability margins (model units) and chain probabilities of the
         training designs.
-    residuals : (n, m) float
+    residuals : (n, 9) float
         Simulated frequency minus chain probability, per face.
     smoothing : float
         RBF smoothing (chosen by cross-validation when learned).
+    physics_coordinates : bool
+        Interpolate over the margins and chain probabilities as well as the
+        parameters (default).
     info : dict
         How the data were made: drops per design, physics version and
         settings, chain constants, cross-validated error.
@@ -358,6 +372,7 @@ class Discrepancy:
     chain: np.ndarray
     residuals: np.ndarray
     smoothing: float
+    physics_coordinates: bool = True
     info: dict = field(default_factory=dict)
 
     #: One face of each mirror class (f1, f2, f5, f6, f7): the coordinates need no duplicates.
@@ -373,30 +388,47 @@ class Discrepancy:
         frequencies: np.ndarray,
         *,
         smoothing: float,
+        physics_coordinates: bool = True,
         info: Mapping | None = None,
     ) -> Discrepancy:
         """The gem discrepancy from simulated `frequencies` (n, 9) at designs with parameters `points` (n, 5).
 
-        `margins` and `chain` (n, 9) are the designs' stability margins and chain probabilities.
+        `margins` and `chain` (n, 9) are the designs' stability margins and
+        chain probabilities; every margin must be positive (stable designs).
         """
         names = tuple(p.name for p in GEM.parameters)
-        chain = np.asarray(chain, dtype=float)
-        residuals = np.asarray(frequencies, dtype=float) - chain
+        points = np.asarray(points, dtype=float)
+        margins, chain = np.asarray(margins, dtype=float), np.asarray(chain, dtype=float)
+        frequencies = np.asarray(frequencies, dtype=float)
+        n = len(points)
+        for name, a, width in (("points", points, len(names)), ("margins", margins, 9), ("chain", chain, 9),
+                               ("frequencies", frequencies, 9)):  # fmt: skip
+            if a.shape != (n, width) or not np.all(np.isfinite(a)):
+                raise DesignError(f"{name} must be a finite ({n}, {width}) array, got shape {a.shape}")
+        dims = len(names) + (2 * len(cls.CLASSES) if physics_coordinates else 0)
+        if n <= dims + 1:
+            raise DesignError(f"need more than {dims + 1} training designs for {dims} coordinates, got {n}")
+        if margins.min() <= 0:
+            raise DesignError(f"training designs must be stable on every face; smallest margin {margins.min():g}")
+        residuals = frequencies - chain
         for i, j in _GEM_MIRRORS:
             residuals[:, [i, j]] = residuals[:, [i, j]].mean(axis=1, keepdims=True)
         bounds = GEM.bounds(list(names))
-        arrays = (np.asarray(points, dtype=float), np.asarray(margins, dtype=float), chain, residuals)
-        return cls(names, bounds[:, 0], bounds[:, 1], *arrays, float(smoothing), dict(info or {}))
+        return cls(
+            names, bounds[:, 0], bounds[:, 1], points, margins, chain, residuals, float(smoothing),
+            bool(physics_coordinates), dict(info or {}),
+        )  # fmt: skip
 
     @classmethod
     def from_json(cls, text: str) -> Discrepancy:
         data = json.loads(text)
         arrays = [np.array(data[k], dtype=float) for k in ("lower", "upper", *cls._ARRAYS)]
-        return cls(tuple(data["parameters"]), *arrays, float(data["smoothing"]), data["info"])
+        physics = bool(data.get("physics_coordinates", True))
+        return cls(tuple(data["parameters"]), *arrays, float(data["smoothing"]), physics, data["info"])
 
     def to_json(self) -> str:
         """JSON text, one training design per line in each array (:meth:`from_json` reads it back)."""
-        head = {k: getattr(self, k) for k in ("parameters", "smoothing", "info")}
+        head = {k: getattr(self, k) for k in ("parameters", "smoothing", "physics_coordinates", "info")}
         head |= {"lower": self.lower.tolist(), "upper": self.upper.tolist()}
         body = json.dumps(head, indent=1, sort_keys=True)[:-2]
         for name in self._ARRAYS:
@@ -407,12 +439,23 @@ class Discrepancy:
     @cached_property
     def _feature_range(self) -> tuple[np.ndarray, np.ndarray]:
         f = np.hstack([self.margins[:, self.CLASSES], self.chain[:, self.CLASSES]])
-        return f.min(axis=0), np.ptp(f, axis=0)
+        span = np.ptp(f, axis=0)
+        return f.min(axis=0), np.where(span > 0, span, 1.0)  # a constant feature adds nothing either way
 
     def _coordinates(self, points: np.ndarray, margins: np.ndarray, chain: np.ndarray) -> np.ndarray:
+        """(n, d) float: interpolation coordinates (see the class docstring)."""
+        unit = (points - self.lower) / (self.upper - self.lower)
+        if not self.physics_coordinates:
+            return unit
         lo, span = self._feature_range
         features = np.hstack([margins[:, self.CLASSES], chain[:, self.CLASSES]])
-        return np.hstack([(points - self.lower) / (self.upper - self.lower), (features - lo) / span])
+        return np.hstack([unit, (features - lo) / span])
+
+    def distance(self, params: Mapping[str, float], margins: np.ndarray, chain: np.ndarray) -> float:
+        """Distance from a design to the nearest training design, in interpolation coordinates."""
+        x = np.array([[params[n] for n in self.parameters]], dtype=float)
+        here = self._coordinates(x, np.atleast_2d(margins), np.atleast_2d(chain))
+        return float(np.sqrt(((self._interpolator.y - here) ** 2).sum(axis=1).min()))
 
     @cached_property
     def _interpolator(self):
@@ -437,24 +480,24 @@ class Discrepancy:
         return self._interpolator(self._coordinates(x[None], np.atleast_2d(margins), np.atleast_2d(chain)))[0]
 
     def correct(self, p: np.ndarray, params: Mapping[str, float], margins: np.ndarray) -> np.ndarray:
-        """Chain probabilities `p` plus the learned residual, on the faces the die can rest on."""
-        r = self(params, margins, p)
+        """Chain probabilities `p` plus the learned residual (faded out below the training margins).
+
+        Faces the die cannot rest on stay at 0; the result is renormalized.
+        """
+        weight = float(np.clip(margins.min() / self.margins.min(), 0.0, 1.0))
+        r = self(params, margins, p) if weight > 0 else None
         if r is None:
             return p
-        out = np.clip(p + r, 0, None)
+        out = np.clip(p + weight * r, 0, None)
         out[margins < 0] = 0.0
         total = out.sum()
         return out / total if total > 0 else p
 
 
 @cache
-def gem_discrepancy(path: str | Path | None = None) -> Discrepancy:
-    """The gem family's :class:`Discrepancy`: the packaged one, or read from `path`."""
-    if path is None:
-        text = resources.files("diefab").joinpath("data", DISCREPANCY_FILE).read_text()
-    else:
-        text = Path(path).read_text()
-    return Discrepancy.from_json(text)
+def gem_discrepancy() -> Discrepancy:
+    """The gem family's :class:`Discrepancy` packaged with diefab (read once)."""
+    return Discrepancy.from_json(resources.files("diefab").joinpath("data", DISCREPANCY_FILE).read_text())
 
 
 def calibrate(
