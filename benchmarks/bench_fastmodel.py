@@ -53,12 +53,15 @@ FOLDS = 5
 MIN_MARGIN = 0.02
 
 
-def random_designs(k: int, seed: int):
+def random_designs(k: int, seed: int, fill: str = "solid"):
     """`k` random stable gems, uniform in the family box (e included), rejection-sampled."""
+    from dataclasses import replace
+
     from diefab.errors import DesignError
     from diefab.families import GEM
+    from diefab.mass import Fill
 
-    base = load_design("fudge-gem")
+    base = replace(load_design("fudge-gem"), fill=Fill(kind=fill))
     bounds = GEM.bounds(["a", "b", "c", "d", "e"])
     rng = np.random.default_rng(seed)
     out = []
@@ -82,15 +85,16 @@ def physics_version() -> str:
     return f"outcomes-{OUTCOME_VERSION}"
 
 
-def _key(params, drops, seed, settings) -> str:
-    return json.dumps([params, drops, seed, settings, physics_version()], sort_keys=True)
+def _key(params, drops, seed, settings, physics, fill="solid") -> str:
+    # solid gems keep the key they had before fills were benchmarked
+    return json.dumps([params, drops, seed, settings, physics] + ([fill] if fill != "solid" else []), sort_keys=True)
 
 
 def load_cache() -> dict:
     if RESULTS.exists():
         data = json.loads(RESULTS.read_text())
         return {
-            json.dumps([r["params"], r["drops"], r["seed"], r["settings"], r["physics"]], sort_keys=True): r
+            _key(r["params"], r["drops"], r["seed"], r["settings"], r["physics"], r.get("fill", "solid")): r
             for r in data["runs"]
         }
     return {}
@@ -111,7 +115,8 @@ def simulated(designs, drops: int, seed: int, which: str, cache: dict, workers: 
     settings = PhysicsSettings().as_dict()
     out = []
     for i, d in enumerate(designs):
-        key = _key(dict(d.params), drops, seed, settings)
+        fill = d.fill.kind
+        key = _key(dict(d.params), drops, seed, settings, physics_version(), fill)
         if key not in cache:
             t = time.perf_counter()
             r = simulate(d, drops, seed=seed, workers=workers)
@@ -123,6 +128,7 @@ def simulated(designs, drops: int, seed: int, which: str, cache: dict, workers: 
                 "seed": seed,
                 "settings": settings,
                 "physics": physics_version(),
+                **({"fill": fill} if fill != "solid" else {}),
                 "face_counts": r.face_counts.tolist(),
                 "cocked": r.cocked,
                 "unsettled": r.unsettled,
@@ -248,6 +254,8 @@ def main(argv=None) -> None:
     ap.add_argument("--designs", type=int, default=20, help="test designs")
     ap.add_argument("--drops", type=int, default=30_000, help="drops per test design")
     ap.add_argument("--test-seed", type=int, default=TEST_SEED, help="design seed of the test set")
+    ap.add_argument("--fill", choices=("solid", "shell", "print"), default="solid",
+                    help="fill of the test gems (the discrepancy was learned on solid ones)")  # fmt: skip
     ap.add_argument("--train-designs", type=int, default=800)
     ap.add_argument("--train-drops", type=int, default=4_000)
     ap.add_argument("--chain-designs", type=int, default=20, help="training designs --calibrate fits the chain on")
@@ -267,9 +275,10 @@ def main(argv=None) -> None:
         train = random_designs(args.train_designs, TRAIN_SEED)
     else:
         train = random_designs(args.chain_designs, TRAIN_SEED) if args.calibrate else []
-    test = random_designs(args.designs, args.test_seed)
+    test = random_designs(args.designs, args.test_seed, args.fill)
     train_runs = simulated(train, args.train_drops, args.seed, "train", cache, args.workers)
     which = "test" if args.test_seed == TEST_SEED else f"test-{args.test_seed}"
+    which += "" if args.fill == "solid" else f"-{args.fill}"
     test_runs = simulated(test, args.drops, args.seed, which, cache, args.workers)
     save_cache(cache)
     if args.collect_only:
@@ -305,7 +314,7 @@ def main(argv=None) -> None:
 
     info = found.info
     print(f"\n{', '.join(models)} against {args.drops}-drop simulations "
-          f"({len(test)} random stable gems, design seed {args.test_seed}, physics seed {args.seed}; "
+          f"({len(test)} random stable {args.fill} gems, design seed {args.test_seed}, physics seed {args.seed}; "
           f"discrepancy learned from {info['designs']} other gems x {info['drops']} drops)")  # fmt: skip
     print(f"{'#':>3} {'a':>6} {'b':>6} {'c':>6} {'d':>6} {'e':>6} {'margin':>7} {'cocked':>7} {'nearest':>7}  "
           + " ".join(f"{'TVD ' + m if i == 0 else m:>9}" for i, m in enumerate(models)))  # fmt: skip

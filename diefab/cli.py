@@ -44,6 +44,16 @@ def _json_default(obj: Any):
     raise TypeError(f"cannot serialize {type(obj).__name__}")
 
 
+def note_fast_fill(d: Design, model: str, fill: str) -> None:
+    """One line on stderr when the fast model's gem correction would be extrapolated to another fill."""
+    if model == "fast" and d.family == "gem" and fill != "solid":
+        click.echo(
+            f"note: the fast model's gem correction was learned on solid gems; with a {fill} fill it is an "
+            "extrapolation (README: the fast model), so check the die with diefab validate",
+            err=True,
+        )
+
+
 def parse_params(items: tuple[str, ...]) -> dict[str, float]:
     """``("a=1.2", "b=0.5")`` -> ``{"a": 1.2, "b": 0.5}``."""
     out = {}
@@ -191,6 +201,7 @@ def predict(design: str, params, model: str, fill: str | None, target: str | Non
     d = get_design(design, params, target)
     fill_model = replace(d.fill, kind=fill) if fill else d.fill
     d.check_stable(0.0, fill_model)
+    note_fast_fill(d, model, fill_model.kind)
     poly = d.polyhedron
     faces = face_probabilities(d, model, fill_model)
     values = to_values(d, faces)
@@ -375,6 +386,7 @@ def optimize(ctx, design, params, model, target, seed, min_margin, starts, free,
         raise click.BadParameter(f"{min_margin} must be a non-negative number", param_hint="--min-margin")
     names = free_parameters(d, free)
     ensure_dir(out_dir)
+    note_fast_fill(d, model, d.fill.kind)
     result = optimize_design(
         d, model=model, objective=objective, names=names, min_margin=min_margin, starts=starts, seed=seed, name=name
     )

@@ -148,3 +148,12 @@ def test_unwritable_output_folder_even_for_root(bad):
     # /proc refuses new folders whoever asks, root included
     line = bad("optimize", "fudge-gem", "--starts", "1", "--out", "/proc/diefab-out")
     assert "cannot create output folder /proc/diefab-out" in line
+
+
+def test_fast_model_on_a_non_solid_gem_says_it_extrapolates(run):
+    code, out, err = run("predict", "fudge-gem", "--model", "fast", "--fill", "shell", "--json")
+    assert code == 0
+    assert json.loads(out)["fill"] == "shell"
+    assert "learned on solid gems" in err and len(err.strip().splitlines()) == 1
+    code, _, err = run("predict", "fudge-gem", "--model", "fast")
+    assert code == 0 and "learned on solid gems" not in err
