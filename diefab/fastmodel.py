@@ -451,10 +451,14 @@ class Discrepancy:
         features = np.hstack([margins[:, self.CLASSES], chain[:, self.CLASSES]])
         return np.hstack([unit, (features - lo) / span])
 
+    def _point(self, params: Mapping[str, float]) -> np.ndarray:
+        """(k,) float: `params` in the column order of `points` (e, if left out, is a*b)."""
+        params = GEM.complete(params)
+        return np.array([params[n] for n in self.parameters], dtype=float)
+
     def distance(self, params: Mapping[str, float], margins: np.ndarray, chain: np.ndarray) -> float:
         """Distance from a design to the nearest training design, in interpolation coordinates."""
-        x = np.array([[params[n] for n in self.parameters]], dtype=float)
-        here = self._coordinates(x, np.atleast_2d(margins), np.atleast_2d(chain))
+        here = self._coordinates(self._point(params)[None], np.atleast_2d(margins), np.atleast_2d(chain))
         return float(np.sqrt(((self._interpolator.y - here) ** 2).sum(axis=1).min()))
 
     @cached_property
@@ -470,11 +474,11 @@ class Discrepancy:
         Parameters
         ----------
         params : mapping
-            The design's family parameters.
+            The design's family parameters (e may be left out, as in a design file).
         margins, chain : (m,) float
             Its stability margins and chain probabilities.
         """
-        x = np.array([params[n] for n in self.parameters], dtype=float)
+        x = self._point(params)
         if np.any(x < self.lower) or np.any(x > self.upper):
             return None
         return self._interpolator(self._coordinates(x[None], np.atleast_2d(margins), np.atleast_2d(chain)))[0]

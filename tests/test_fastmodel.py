@@ -258,6 +258,10 @@ def test_discrepancy_json_round_trip():
     x = dict(zip("abcde", BOUNDS.mean(axis=1)))
     margins, chain = fit.margins[0], fit.chain[0]
     assert np.allclose(again(x, margins, chain), fit(x, margins, chain), atol=1e-12)
+    # a design file's parameters may leave e out: it is a*b, as the family says
+    paper = load_design("fudge-gem").params
+    assert "e" not in paper
+    assert np.array_equal(fit(paper, margins, chain), fit({**paper, "e": paper["a"] * paper["b"]}, margins, chain))
     assert again.info == fit.info
 
 
