@@ -27,6 +27,7 @@ Usage::
     python benchmarks/bench_fastmodel.py --calibrate      # refit the chain's constants (paste them into fastmodel.py)
     python benchmarks/bench_fastmodel.py --learn          # relearn the gem discrepancy (~20 min to simulate)
     python benchmarks/bench_fastmodel.py --ablation       # its coordinates and training size, cross-validated
+    python benchmarks/bench_fastmodel.py --optima         # the 4dF optima of fast and chain, validated (30k drops)
 """
 
 from __future__ import annotations
@@ -41,7 +42,7 @@ import numpy as np
 
 from diefab.design import load_design
 from diefab.files import atomic_write
-from diefab.stats import tvd
+from diefab.stats import jsd, pearson_divergence, tvd
 
 RESULTS = Path(__file__).with_name("results") / "fastmodel.json"
 DISCREPANCY = Path(__file__).resolve().parents[1] / "diefab" / "data"
@@ -249,6 +250,28 @@ def ablation(training: TrainingSet, test, test_q) -> None:
     print(f"test set with the parameters alone as coordinates: median TVD {np.median(err):.4f}, max {max(err):.4f}")
 
 
+def optima(drops: int, seeds=(1, 2), workers: int | None = None) -> None:
+    """The 4dF optimum of the fast model and of its chain alone, each validated by simulation."""
+    from diefab import fastmodel
+    from diefab.models import MODELS
+    from diefab.optimize import optimize_design
+    from diefab.physics import simulate
+
+    MODELS.setdefault("chain", fastmodel.landing_probabilities)  # for this benchmark only
+    base = load_design("fudge-gem")
+    goal = base.target_distribution.aligned(base.support)
+    print(f"\n4dF optima (diefab optimize fudge-gem --model M, seed 0), validated with {drops} drops per seed")
+    for model in ("fast", "chain"):
+        t = time.perf_counter()
+        d = optimize_design(base, model=model, seed=0).design
+        seconds = time.perf_counter() - t
+        params = " ".join(f"{k}={v:.4f}" for k, v in d.params.items())
+        q = [simulate(d, drops, seed=s, workers=workers).value_probabilities(d) for s in seeds]
+        print(f"{model:>6}: {params}  ({seconds:.1f} s); TVD to 4dF at seeds {' / '.join(map(str, seeds))}: "
+              f"{' / '.join(f'{tvd(v, goal):.4f}' for v in q)}; at seed {seeds[0]} Eq. (2) "
+              f"{pearson_divergence(q[0], goal):.5f}, JSD {jsd(q[0], goal):.5f}")  # fmt: skip
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--designs", type=int, default=20, help="test designs")
@@ -264,6 +287,7 @@ def main(argv=None) -> None:
     ap.add_argument("--calibrate", action="store_true", help="refit the chain's five constants (prints them)")
     ap.add_argument("--learn", action="store_true", help="relearn the gem discrepancy from the training set")
     ap.add_argument("--ablation", action="store_true", help="cross-validate the discrepancy's coordinates and size")
+    ap.add_argument("--optima", action="store_true", help="validate the 4dF optima of the fast model and its chain")
     ap.add_argument("--collect-only", action="store_true", help="simulate (fill the cache) and stop")
     args = ap.parse_args(argv)
     if args.calibrate and (args.learn or args.ablation):
@@ -338,6 +362,8 @@ def main(argv=None) -> None:
                   f"(at {info['drops']} drops, noise included)")  # fmt: skip
     if args.ablation:
         ablation(training, test, frequencies(test_runs))
+    if args.optima:
+        optima(args.drops, workers=args.workers)
 
     # speed, against the solid-angle model in the same run
     d = load_design("fudge-gem")
