@@ -1,10 +1,4 @@
-"""Parametric die families.
-
-A family turns a parameter mapping into a :class:`~diefab.geometry.Polyhedron`
-and knows its parameters' bounds and its reference length (what ``size_mm``
-measures).  ``gem`` is the paper's 9-faced gem; ``convex`` is any convex
-polyhedron given by its vertices (and optionally faces) in the design file;
-``mesh`` is a convex mesh file.
+"""The paper's 9-faced gem: a pyramid frustum on an inverted pyramid.
 
 Examples
 --------
@@ -17,81 +11,15 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from collections.abc import Mapping
 
 import numpy as np
 
-from .errors import DesignError, GeometryError
-from .geometry import Polyhedron
+from ..errors import DesignError, GeometryError
+from ..geometry import Polyhedron
+from .base import Family, Parameter
 
-__all__ = [
-    "GEM",
-    "Family",
-    "Parameter",
-    "family",
-    "gem_center_of_mass_y",
-    "gem_parameters",
-    "gem_polyhedron",
-    "gem_vertices",
-]
-
-
-@dataclass(frozen=True)
-class Parameter:
-    """A bounded real parameter of a family."""
-
-    name: str
-    lower: float
-    upper: float
-    description: str
-    optional: bool = False
-    #: Value of an optional parameter computed from the others when absent.
-    default: Callable[[Mapping[str, float]], float] | None = None
-
-    def check(self, value: float) -> float:
-        value = float(value)
-        if not np.isfinite(value):
-            raise DesignError(f"{self.name}={value} is not a finite number")
-        if not self.lower <= value <= self.upper:
-            raise DesignError(f"{self.name}={value:g} is outside [{self.lower:g}, {self.upper:g}]")
-        return value
-
-
-@dataclass(frozen=True)
-class Family:
-    """A named family of convex dice."""
-
-    name: str
-    parameters: tuple[Parameter, ...]
-    description: str
-
-    def check_params(self, params: Mapping[str, float]) -> dict[str, float]:
-        """Validated parameters: known names, all required present, within bounds."""
-        known = {p.name: p for p in self.parameters}
-        unknown = sorted(set(params) - set(known))
-        if unknown:
-            raise DesignError(
-                f"family {self.name!r} has no parameter {unknown[0]!r} (parameters: {', '.join(known) or 'none'})"
-            )
-        missing = [p.name for p in self.parameters if not p.optional and p.name not in params]
-        if missing:
-            raise DesignError(f"family {self.name!r} needs parameter {missing[0]!r}")
-        return {name: known[name].check(value) for name, value in params.items()}
-
-    def complete(self, params: Mapping[str, float]) -> dict[str, float]:
-        """`params` with every absent optional parameter set to its default."""
-        out = dict(params)
-        for p in self.parameters:
-            if p.name not in out and p.default is not None:
-                out[p.name] = p.default(out)
-        return out
-
-    def bounds(self, names: list[str]) -> np.ndarray:
-        """(k, 2) float: lower and upper bounds of the named parameters."""
-        known = {p.name: p for p in self.parameters}
-        return np.array([(known[n].lower, known[n].upper) for n in names])
-
+__all__ = ["GEM", "gem_center_of_mass_y", "gem_parameters", "gem_polyhedron", "gem_vertices"]
 
 GEM = Family(
     "gem",
@@ -106,11 +34,6 @@ GEM = Family(
     ),
     "frustum of a pyramid on an inverted pyramid: 9 faces (the paper's 'gem')",
 )
-
-CONVEX = Family("convex", (), "any convex polyhedron given by its vertices")
-MESH = Family("mesh", (), "a convex mesh file (OBJ, STL, PLY)")
-
-_FAMILIES = {f.name: f for f in (GEM, CONVEX, MESH)}
 
 # Faces exactly as the paper lists them (1-based vertex numbers), outward CCW.
 _GEM_FACES = tuple(
@@ -127,14 +50,6 @@ _GEM_FACES = tuple(
         (9, 4, 1),
     )
 )
-
-
-def family(name: str) -> Family:
-    """The family called `name`."""
-    try:
-        return _FAMILIES[name]
-    except KeyError:
-        raise DesignError(f"unknown family {name!r} (known: {', '.join(_FAMILIES)})") from None
 
 
 def gem_vertices(a: float, b: float, c: float, d: float, e: float | None = None) -> np.ndarray:

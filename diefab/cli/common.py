@@ -1,0 +1,179 @@
+"""Shared plumbing of the command line: the DESIGN argument, common options, output helpers."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import click
+import numpy as np
+
+from ..design import Design, load_design
+
+
+def console(stderr: bool = False):
+    from rich.console import Console
+
+    return Console(stderr=stderr, highlight=False, soft_wrap=True)
+
+
+def emit_json(obj: Any) -> None:
+    """Print one JSON object on stdout."""
+    click.echo(json.dumps(obj, indent=2, default=_json_default, ensure_ascii=False))
+
+
+def _json_default(obj: Any):
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"cannot serialize {type(obj).__name__}")
+
+
+def note_fast_fill(d: Design, model: str, fill: str) -> None:
+    """One line on stderr when the fast model's gem correction would be extrapolated to another fill."""
+    if model == "fast" and d.family == "gem" and fill != "solid":
+        click.echo(
+            f"note: the fast model's gem correction was learned on solid gems; with a {fill} fill it is an "
+            "extrapolation (README: the fast model), so check the die with diefab validate",
+            err=True,
+        )
+
+
+def parse_params(items: tuple[str, ...]) -> dict[str, float]:
+    """``("a=1.2", "b=0.5")`` -> ``{"a": 1.2, "b": 0.5}``."""
+    out = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            raise click.BadParameter(f"{item!r} is not NAME=VALUE", param_hint="--param")
+        try:
+            out[name.strip()] = float(value)
+        except ValueError:
+            raise click.BadParameter(f"{item!r}: {value!r} is not a number", param_hint="--param") from None
+    return out
+
+
+def design_argument(func):
+    """Add the DESIGN argument and ``--param NAME=VALUE`` overrides to a command."""
+    func = click.option(
+        "--param",
+        "params",
+        multiple=True,
+        metavar="NAME=VALUE",
+        help="Override a design parameter, e.g. --param a=1.2 (repeatable).",
+    )(func)
+    return click.argument("design", metavar="DESIGN")(func)
+
+
+def get_design(spec: str, params: tuple[str, ...] = (), target: str | None = None) -> Design:
+    """Load DESIGN (template name or TOML path) and apply overrides."""
+    design = load_design(spec)
+    if params:
+        design = design.with_params(**parse_params(params))
+    if target is not None:
+        design = design.with_target(target)
+    return design
+
+
+def free_parameters(design: Design, free: str | None) -> list[str] | None:
+    """``--free a,b,c`` -> the named parameters of the design's family (None when not given)."""
+    if free is None:
+        return None
+    from ..families import family
+
+    names = [n.strip() for n in free.split(",") if n.strip()]
+    known = [p.name for p in family(design.family).parameters]
+    bad = [n for n in names if n not in known]
+    if bad or not names:
+        raise click.BadParameter(
+            f"{free!r}: {bad[0] if bad else 'none'} is not a parameter of {design.family} ({','.join(known)})",
+            param_hint="--free",
+        )
+    return names
+
+
+def heading(design: Design, **settings: object) -> str:
+    """``[bold]name[/bold]  a=1.18 b=0.52 ...  key=value ...``: the first line of a human report."""
+    params = " ".join(f"{k}={v:g}" for k, v in design.params.items())
+    return "  ".join([f"[bold]{design.name}[/bold]", params, *(f"{k}={v}" for k, v in settings.items())])
+
+
+def values_dict(design: Design, probs: np.ndarray) -> dict[str, float]:
+    """``{"-4": p, ...}`` keyed by the design's values."""
+    return {str(v): float(p) for v, p in zip(design.support, probs)}
+
+
+def out_option(func):
+    return click.option(
+        "--out",
+        "out_dir",
+        type=click.Path(file_okay=False, path_type=Path),
+        default=Path("out"),
+        show_default=True,
+        help="Output folder.",
+    )(func)
+
+
+def json_option(func):
+    return click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")(func)
+
+
+def simulation_options(func):
+    """Options of ``optimize --model simulation``."""
+    opts = [
+        click.option("--sims-per-eval", type=int, default=1000, show_default=True,
+                     help="[simulation] Drops per evaluation at the start (doubled as it converges)."),
+        click.option("--max-sims-per-eval", type=int, default=None,
+                     help="[simulation] Most drops per evaluation (default 16x --sims-per-eval)."),
+        click.option("--budget", type=float, default=20.0, show_default=True,
+                     help="[simulation] Wall-time budget of the whole run, minutes."),
+        click.option("--resume", "resume", type=click.Path(path_type=Path), default=None, metavar="RUN_DIR",
+                     help="[simulation] Continue the interrupted run in RUN_DIR."),
+        click.option("--method", type=click.Choice(["cma", "nm"]), default="cma", show_default=True,
+                     help="[simulation] CMA-ES or Nelder-Mead restarts."),
+        click.option("--start", "start_model", type=click.Choice(["fast", "solid-angle", "design"]), default="fast",
+                     show_default=True, help="[simulation] Start from this model's optimum or the design itself."),
+        click.option("--sigma", type=float, default=0.1, show_default=True,
+                     help="[simulation] Initial step, fraction of each parameter's range."),
+        click.option("--max-evals", type=int, default=None, help="[simulation] Stop after this many evaluations."),
+        click.option("--workers", type=int, default=None, help="[simulation] Worker processes (default all cores)."),
+        click.option("--scheduler", default=None, metavar="ADDRESS", help="[simulation] Dask scheduler address."),
+    ]  # fmt: skip
+    for opt in reversed(opts):
+        func = opt(func)
+    return func
+
+
+def physics_options(func):
+    """Options that override the design's [physics] table (see diefab.physics.PhysicsSettings)."""
+    options = [
+        ("--restitution", float, "Restitution of die and ground, in [0, 1] (default 0.3)."),
+        ("--friction", float, "Friction of die and ground, >= 0 (default 0.8)."),
+        ("--rolling-friction", float, "Rolling friction, >= 0 (default 0)."),
+        ("--spinning-friction", float, "Spinning friction, >= 0 (default 0)."),
+        ("--time-step", float, "Simulation step, seconds (default 1/240)."),
+        ("--solver-iterations", int, "Constraint-solver iterations per step, fixed (default 5)."),
+        ("--collision-margin", float, "Collision margin, model units (default 0.001)."),
+        ("--drop-height", float, "Initial height of the centre of mass, model units (default 5)."),
+        ("--height-jitter", float, "Height is uniform in drop-height +- this (default 0.5)."),
+        ("--settle-time", float, "Seconds still on a face to count it (default 0.1)."),
+        ("--time-limit", float, "Seconds before a moving die counts as unsettled (default 20)."),
+        ("--face-tolerance", float, "Degrees from straight down for a face to count (default 3)."),
+        (
+            "--energy-fraction",
+            float,
+            "Early stop: a die in a face's basin with less than this fraction of "
+            "the basin's barrier in energy has landed; 0 runs every die until still (default 0.95).",
+        ),
+    ]
+    for flag, kind, text in reversed(options):
+        func = click.option(flag, type=kind, default=None, help=text)(func)
+    func = click.option("--angular-velocity", type=(float, float), default=None, metavar="MIN MAX",
+                        help="Range of the initial spin, rad/s (default 0 10).")(func)  # fmt: skip
+    func = click.option("--linear-velocity", type=(float, float), default=None, metavar="MIN MAX",
+                        help="Range of the initial horizontal speed, units/s (default 0 0).")(func)  # fmt: skip
+    return func

@@ -1,0 +1,308 @@
+"""``diefab optimize``: fit a design's parameters to its target (solid-angle, fast or simulation)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+import numpy as np
+
+from ..files import atomic_write, ensure_dir
+from .common import (
+    console,
+    design_argument,
+    emit_json,
+    free_parameters,
+    get_design,
+    json_option,
+    note_fast_fill,
+    out_option,
+    simulation_options,
+    values_dict,
+)
+
+
+@click.command()
+@design_argument
+@click.option(
+    "--model",
+    default="solid-angle",
+    show_default=True,
+    help="Landing model to fit: solid-angle, fast, or simulation (pybullet drops).",
+)
+@click.option("--target", default=None, help="Target distribution (default: the design's).")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the random starts.")
+@click.option(
+    "--min-margin",
+    type=float,
+    default=0.05,
+    show_default=True,
+    help="Smallest stability margin of every face, model units (the girdle half-width is 1).",
+)
+@click.option("--starts", type=click.IntRange(0, 1000), default=6, show_default=True, help="Random starts.")
+@click.option(
+    "--free",
+    default=None,
+    metavar="A,B,...",
+    help="Parameters to optimize (default: all of the family's, e.g. a,b,c,d,e for the gem).",
+)
+@click.option("--objective", type=click.Choice(["eq2", "tvd", "jsd"]), default="eq2", show_default=True)
+@click.option("--name", default=None, help="Name of the optimized design (default DESIGN-MODEL-opt).")
+@simulation_options
+@out_option
+@json_option
+@click.pass_context
+def optimize(ctx, design, params, model, target, seed, min_margin, starts, free, objective, name, out_dir, as_json,
+             **sim) -> None:  # fmt: skip
+    """Fit DESIGN's parameters to its target; write the result as a template TOML.
+
+    With --model simulation the objective uses pybullet drop frequencies
+    (diefab validate's physics); the run is logged in OUT/NAME/ and can be
+    resumed with --resume OUT/NAME.
+    """
+    from ..design import design_to_toml
+    from ..optimize import optimize_design
+
+    if model == "simulation":
+        return optimize_simulation(ctx, design, params, target, seed, min_margin, starts, free, objective, name,
+                                   out_dir, as_json, **sim)  # fmt: skip
+    d = get_design(design, params, target)
+    if not np.isfinite(min_margin) or min_margin < 0:
+        raise click.BadParameter(f"{min_margin} must be a non-negative number", param_hint="--min-margin")
+    names = free_parameters(d, free)
+    ensure_dir(out_dir)
+    note_fast_fill(d, model, d.fill.kind)
+    result = optimize_design(
+        d, model=model, objective=objective, names=names, min_margin=min_margin, starts=starts, seed=seed, name=name
+    )
+    best = result.design
+    path = atomic_write(
+        out_dir / f"{best.name}.toml",
+        design_to_toml(best, comment=f"Written by: diefab optimize {design} --model {model} --seed {seed}"),
+    )
+    goal = best.target_distribution.aligned(best.support)
+    margins = result.margins
+    report = {
+        "design": best.name,
+        "model": model,
+        "objective_name": objective,
+        "objective": result.objective,
+        "params": dict(best.params),
+        "values": values_dict(best, result.values),
+        "target_values": values_dict(best, goal),
+        "margins": dict(zip(best.polyhedron.names, margins.tolist())),
+        "min_margin": float(margins.min()),
+        "min_margin_mm": float(margins.min() * best.mm_per_unit),
+        "binding_face": result.binding_face,
+        "evaluations": result.evaluations,
+        "starts": result.starts,
+        "design_file": str(path),
+    }
+    if as_json:
+        emit_json(report)
+        return
+    con = console()
+    con.print(
+        f"[bold]{best.name}[/bold]  "
+        + " ".join(f"{k}={v:.4f}" for k, v in best.params.items())
+        + f"\n{objective} = {result.objective:.5f} under the {model} model "
+        f"({result.evaluations} evaluations from {result.starts} starts)"
+    )
+    con.print(
+        "value      "
+        + " ".join(f"{v:>6d}" for v in best.support)
+        + "\nmodel x81  "
+        + " ".join(f"{81 * q:6.2f}" for q in result.values)
+        + "\ntarget x81 "
+        + " ".join(f"{81 * q:6.2f}" for q in goal)
+    )
+    con.print(
+        f"smallest stability margin {margins.min():.4f} ({margins.min() * best.mm_per_unit:.2f} mm at "
+        f"{best.size_mm:g} mm) on face {result.binding_face}; required {min_margin:g}"
+    )
+    con.print(f"wrote {path}")
+
+
+def _simulation_view(spec, budget_s: float, history):
+    """A rich live panel on stderr (None when stderr is not a terminal)."""
+    con = console(stderr=True)
+    if not con.is_terminal:
+        return None, None
+    from rich.live import Live
+    from rich.table import Table
+
+    state = {
+        "evals": len(history),
+        "drops": sum(r["drops"] for r in history),
+        "best": None,
+        "elapsed": history[-1].get("elapsed", 0.0) if history else 0.0,
+    }
+
+    def render():
+        t = Table.grid(padding=(0, 2))
+        best = state["best"]
+        left = max(budget_s - state["elapsed"], 0.0)
+        t.add_row("evaluations", str(state["evals"]), "drops simulated", f"{state['drops']:,}")
+        t.add_row(
+            f"best {spec.objective}",
+            "-" if best is None else f"{best['objective']:.5f} at {best['drops']} drops",
+            "time left",
+            f"{left / 60:.1f} min",
+        )
+        if best is not None:
+            t.add_row("best params", " ".join(f"{k}={v:.4f}" for k, v in best["params"].items()), "", "")
+        return t
+
+    live = Live(render(), console=con, refresh_per_second=2, transient=False)
+
+    def update(record=None, best=None):
+        if record is not None:
+            state["evals"] += 1
+            state["drops"] += record["drops"]
+            state["elapsed"] = record.get("elapsed", state["elapsed"])
+        if best is not None:
+            state["best"] = best
+        live.update(render())
+
+    return live, update
+
+
+def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, free, objective, name, out_dir,
+                        as_json, sims_per_eval, max_sims_per_eval, budget, resume, method, start_model, sigma,
+                        max_evals, workers, scheduler) -> None:  # fmt: skip
+    """``diefab optimize DESIGN --model simulation``: see :mod:`diefab.simopt`."""
+    from ..design import design_to_toml
+    from ..families import family
+    from ..physics import PhysicsSettings
+    from ..simopt import RunError, RunLog, RunSpec, best_design, optimize_by_simulation, start_point
+
+    if not (np.isfinite(budget) and budget > 0):
+        raise click.BadParameter(f"{budget} must be a positive number of minutes", param_hint="--budget")
+    if sims_per_eval <= 0:
+        raise click.BadParameter(f"{sims_per_eval} must be > 0", param_hint="--sims-per-eval")
+    if max_sims_per_eval is not None and max_sims_per_eval < sims_per_eval:
+        raise click.BadParameter(f"{max_sims_per_eval} must be >= --sims-per-eval", param_hint="--max-sims-per-eval")
+    if max_evals is not None and max_evals <= 0:
+        raise click.BadParameter(f"{max_evals} must be > 0", param_hint="--max-evals")
+    if workers is not None and workers <= 0:
+        raise click.BadParameter(f"{workers} must be > 0", param_hint="--workers")
+    if objective not in ("eq2", "tvd"):
+        raise click.BadParameter(f"{objective!r}: a simulation run minimizes eq2 or tvd", param_hint="--objective")
+    if not np.isfinite(min_margin) or min_margin < 0:
+        raise click.BadParameter(f"{min_margin} must be a non-negative number", param_hint="--min-margin")
+    d = get_design(design, params, target)
+    d.check_stable(0.0)
+    warning = None
+    if resume is not None:
+        log = RunLog(resume)
+        spec = log.spec()
+        stored = spec.design
+        if (stored.name, stored.family, dict(stored.values), stored.target) != (d.name, d.family, dict(d.values),
+                                                                                 d.target):  # fmt: skip
+            raise RunError(f"run {resume} optimizes design {stored.name!r} for {stored.target}, not {d.name!r} "
+                           f"for {d.target}")  # fmt: skip
+        given = {"seed": seed, "sims_per_eval": sims_per_eval, "objective": objective, "min_margin": min_margin,
+                 "method": method}  # fmt: skip
+        for key, value in given.items():
+            source = ctx.get_parameter_source(key)
+            if source is not None and source.name == "COMMANDLINE" and value != getattr(spec, key):
+                raise RunError(f"--{key.replace('_', '-')} {value} differs from the run's {getattr(spec, key)} "
+                               f"(stored in {log.spec_path})")  # fmt: skip
+        history, warning = log.read()
+        run_name = Path(resume).name
+    else:
+        names = free_parameters(d, free) or [p.name for p in family(d.family).parameters]
+        run_name = name or f"{d.name}-simulation-opt"
+        log = RunLog(out_dir / run_name)
+        if log.path.exists():
+            raise RunError(f"{log.folder} already holds a run: resume it with --resume {log.folder} or pick --name")
+        physics = PhysicsSettings.from_mapping(d.physics)
+        x0 = start_point(d, names, model=start_model, objective=objective, min_margin=min_margin, starts=starts,
+                         seed=seed)  # fmt: skip
+        spec = RunSpec(
+            design_toml=design_to_toml(d), names=tuple(names), x0=tuple(float(v) for v in x0), objective=objective,
+            min_margin=float(min_margin), seed=seed, sims_per_eval=sims_per_eval,
+            max_sims=max_sims_per_eval or 16 * sims_per_eval, method=method, sigma0=sigma,
+            physics=physics.as_dict(), start=start_model,
+        )  # fmt: skip
+        log.create(spec)
+        history = []
+    if warning:
+        click.echo(f"diefab: warning: {warning}", err=True)
+    client = None
+    if scheduler is not None:
+        from ..physics import dask_client
+
+        client, _ = dask_client(scheduler)
+    best_path = log.folder / f"{run_name}.toml"
+    command = f"diefab optimize {design} --model simulation --seed {spec.seed} (run {log.folder})"
+    live, update = _simulation_view(spec, budget * 60, history)
+
+    def on_best(record):
+        best = best_design(spec, record, run_name)
+        atomic_write(best_path, design_to_toml(best, comment=f"Written by: {command}"))
+        if update:
+            update(best=record)
+
+    last = {"elapsed": history[-1].get("elapsed") if history else None}
+
+    def on_evaluation(record):
+        log.append(record)
+        last["elapsed"] = record["elapsed"]
+        if update:
+            update(record=record)
+
+    log.open()
+    try:
+        if live:
+            live.start()
+        result = optimize_by_simulation(
+            spec, workers=workers, scheduler=client, history=history, on_evaluation=on_evaluation, on_best=on_best,
+            budget_seconds=budget * 60, max_evaluations=max_evals,
+        )  # fmt: skip
+    except KeyboardInterrupt:
+        if live:
+            live.stop()
+        log.close()
+        click.echo(f"diefab: interrupted; resume with: diefab optimize {design} --model simulation --resume "
+                   f"{log.folder}", err=True)  # fmt: skip
+        sys.exit(130)
+    finally:
+        if live:
+            live.stop()
+        log.close()
+        if client is not None:
+            client.close()
+    if result.best is None:
+        raise RunError(f"no stable candidate was simulated in {result.evaluations} evaluations: "
+                       "lower --min-margin or change the target")  # fmt: skip
+    best = result.best
+    report = {
+        "design": run_name,
+        "model": "simulation",
+        "objective_name": spec.objective,
+        "objective": best["objective"],
+        "drops_per_evaluation": best["drops"],
+        "params": best["params"],
+        "min_margin": best["min_margin"],
+        "evaluations": result.evaluations,
+        "replayed": result.replayed,
+        "drops": result.drops,
+        "finished": result.finished,
+        "run_folder": str(log.folder),
+        "design_file": str(best_path),
+        "elapsed_seconds": last["elapsed"],
+    }
+    if as_json:
+        emit_json(report)
+        return
+    con = console()
+    con.print(
+        f"[bold]{run_name}[/bold]  "
+        + " ".join(f"{k}={v:.4f}" for k, v in best["params"].items())
+        + f"\n{spec.objective} = {best['objective']:.5f} at {best['drops']} drops (seed {spec.seed}); "
+        f"{result.evaluations} evaluations ({result.replayed} replayed), {result.drops:,} drops; "
+        f"min margin {best['min_margin']:.4f}"
+    )
+    con.print(f"log {log.path}\nwrote {best_path}")

@@ -1,0 +1,98 @@
+"""``diefab templates`` and ``diefab predict``: what a design is and how it lands."""
+
+from __future__ import annotations
+
+import click
+
+from ..design import format_value
+from .common import console, design_argument, emit_json, get_design, heading, json_option, note_fast_fill, values_dict
+
+
+@click.command()
+@json_option
+def templates(as_json: bool) -> None:
+    """List the shipped design templates."""
+    from ..design import list_templates
+
+    designs = list_templates()
+    if as_json:
+        emit_json({d.name: d.description for d in designs})
+        return
+    width = max(len(d.name) for d in designs)
+    for d in designs:
+        click.echo(f"{d.name:<{width}}  {d.description}")
+
+
+@click.command()
+@design_argument
+@click.option("--model", default="solid-angle", show_default=True, help="Landing model.")
+@click.option(
+    "--fill", type=click.Choice(["solid", "shell", "print"]), default=None, help="Override the design's fill."
+)
+@click.option("--target", default=None, help="Override the design's target distribution.")
+@json_option
+def predict(design: str, params, model: str, fill: str | None, target: str | None, as_json: bool) -> None:
+    """Landing probabilities, centre of mass and stability margins of DESIGN."""
+    from dataclasses import replace
+
+    from ..models import face_probabilities, to_values
+    from ..stats import jsd, pearson_divergence, tvd
+
+    d = get_design(design, params, target)
+    fill_model = replace(d.fill, kind=fill) if fill else d.fill
+    d.check_stable(0.0, fill_model)
+    note_fast_fill(d, model, fill_model.kind)
+    poly = d.polyhedron
+    faces = face_probabilities(d, model, fill_model)
+    values = to_values(d, faces)
+    goal = d.target_distribution.aligned(d.support)
+    com = d.mass_properties(fill_model).center
+    margins = d.margins(fill_model)
+    result = {
+        "design": d.name,
+        "model": model,
+        "fill": fill_model.kind,
+        "params": dict(d.params),
+        "target": d.target,
+        "faces": [
+            {
+                "name": n,
+                "value": d.values[n],
+                "label_face": d.label_face[n],
+                "probability": float(p),
+                "margin": float(m),
+            }
+            for n, p, m in zip(poly.names, faces, margins)
+        ],
+        "values": values_dict(d, values),
+        "target_values": values_dict(d, goal),
+        "center_of_mass": com.tolist(),
+        "margins": {n: float(m) for n, m in zip(poly.names, margins)},
+        "min_margin": float(margins.min()),
+        "objective": pearson_divergence(values, goal),
+        "tvd": tvd(values, goal),
+        "jsd": jsd(goal, values),
+    }
+    if as_json:
+        emit_json(result)
+        return
+    from rich.table import Table
+
+    con = console()
+    con.print(heading(d, model=model, fill=fill_model.kind))
+    con.print(f"centre of mass: ({com[0]:.4f}, {com[1]:.4f}, {com[2]:.4f})  model units")
+    table = Table("face", "value", "label on", "probability", "margin")
+    for f in result["faces"]:
+        table.add_row(
+            f["name"],
+            format_value(f["value"], min(d.support) < 0),
+            f["label_face"] or "(vertex)",
+            f"{f['probability']:.4f}",
+            f"{f['margin']:.4f}",
+        )
+    con.print(table)
+    table = Table("value", "predicted", "target", "difference")
+    for v, p, q in zip(d.support, values, goal):
+        table.add_row(str(v), f"{p:.4f}", f"{q:.4f}", f"{p - q:+.4f}")
+    con.print(table)
+    con.print(f"Eq. (2) objective {result['objective']:.5f}   TVD {result['tvd']:.4f}   JSD {result['jsd']:.5f}")

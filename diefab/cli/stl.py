@@ -1,0 +1,85 @@
+"""``diefab stl``: a printable solid with engraved values."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from ..errors import DiefabError
+from ..files import atomic_write, ensure_dir
+from .common import design_argument, emit_json, get_design, json_option, out_option
+
+
+@click.command("stl")
+@design_argument
+@click.option("--size", "size_mm", type=float, default=None, help="Size in mm (2 model units along z).")
+@click.option("--depth", "depth_mm", type=float, default=0.6, show_default=True, help="Engraving depth, mm.")
+@click.option("--font", "font_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Font file (default DejaVu Sans Bold, shipped with matplotlib).")  # fmt: skip
+@click.option("--round", "round_mm", type=float, default=0.0, show_default=True, help="Edge/corner radius, mm.")
+@click.option("--emboss", is_flag=True, help="Raise the labels instead of engraving them.")
+@click.option("--format", "formats", default="stl", show_default=True, metavar="stl,3mf", help="Output formats.")
+@click.option("--min-stroke", type=float, default=0.6, show_default=True, help="Warn below this stroke width, mm.")
+@click.option("--min-text-height", type=float, default=2.0, show_default=True, help="Smallest text height, mm.")
+@click.option("--margin", "margin_mm", type=float, default=1.0, show_default=True, help="Text to face edge, mm.")
+@click.option("--density", type=float, default=1.24, show_default=True, help="Material density, g/cm³ (PLA).")
+@click.option("--infill", type=float, default=None, help="Infill fraction of the print (default design's or 0.15).")
+@click.option("--wall", "wall_mm", type=float, default=None, help="Wall thickness of the print, mm (default 1.2).")
+@click.option("--fit-each", is_flag=True, help="Size each value label to its face (default: one height for all).")
+@click.option("--preview", is_flag=True, help="Also write DIR/<design>-preview.png.")
+@out_option
+@json_option
+def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, formats, min_stroke, min_text_height,
+        margin_mm, density, infill, wall_mm, fit_each, preview, out_dir, as_json) -> None:  # fmt: skip
+    """Printable STL/3MF of DESIGN with its values engraved; report volume, mass and balance."""
+    from ..errors import FabricationError
+    from ..fabricate.stl import build_solid, stl_bytes, threemf_bytes
+    from ..mass import Fill
+
+    kinds = [f.strip().lower() for f in formats.split(",") if f.strip()]
+    bad = [f for f in kinds if f not in ("stl", "3mf")]
+    if bad or not kinds:
+        raise click.BadParameter(f"{formats!r}: formats are stl and 3mf", param_hint="--format")
+    d = get_design(design, params)
+    base = d.fill if d.fill.kind == "print" else Fill("print")
+    try:
+        fill = Fill("print", base.wall_mm if wall_mm is None else wall_mm, base.infill if infill is None else infill)
+    except DiefabError as exc:
+        raise FabricationError(str(exc)) from exc
+    ensure_dir(out_dir)
+    solid = build_solid(
+        d, size_mm=size_mm, depth_mm=depth_mm, font=font_file, round_mm=round_mm, emboss=emboss,
+        min_stroke_mm=min_stroke, min_text_height_mm=min_text_height, margin_mm=margin_mm,
+        density_g_cm3=density, print_fill=fill, uniform_height=not fit_each,
+    )  # fmt: skip
+    payloads = {f"{d.name}.{k}": (stl_bytes if k == "stl" else threemf_bytes)(solid) for k in dict.fromkeys(kinds)}
+    if preview:
+        from ..fabricate.preview import render_preview
+
+        payloads[f"{d.name}-preview.png"] = render_preview(solid)
+    written = [str(atomic_write(out_dir / name, data)) for name, data in payloads.items()]
+    for line in solid.warnings:
+        click.echo(f"diefab: warning: {line}", err=True)
+    report = {"file": written[0], "files": written, **solid.report}
+    if as_json:
+        emit_json(report)
+        return
+    r = solid.report
+    click.echo(
+        f"{d.name}: {r['size_mm']:g} mm, {len(r['labels'])} labels {'embossed' if emboss else 'engraved'} "
+        f"{depth_mm:g} mm{f', edges rounded {round_mm:g} mm' if round_mm else ''}\n"
+        f"volume {r['volume_mm3']:.1f} mm³ (uncut {r['uncut_volume_mm3']:.1f}, text "
+        f"{r['engraved_volume_mm3']:.1f}); watertight {r['watertight']}, bodies {r['bodies']}, genus {r['genus']}\n"
+        f"mass {r['mass_g']:.2f} g printed ({fill.wall_mm:g} mm walls, {fill.infill:.0%} infill), "
+        f"{r['mass_solid_g']:.2f} g solid, at {density:g} g/cm³\n"
+        f"centre of mass shift: engraving {r['com_shift_norm_mm'] * 1000:.1f} µm, "
+        f"infill {r['infill_com_shift_norm_mm'] * 1000:.1f} µm"
+    )
+    before = r["probabilities"]["rounded" if round_mm else "sharp"]
+    click.echo("value       " + " ".join(f"{v:>8s}" for v in before))
+    for key in ("sharp", "rounded", "engraved", "printed"):
+        if key in r["probabilities"]:
+            click.echo(f"{key:<11s} " + " ".join(f"{p:8.5f}" for p in r["probabilities"][key].values()))
+    for path in written:
+        click.echo(f"wrote {path}")

@@ -1,0 +1,125 @@
+"""``diefab validate``: drop the die in pybullet and test the counts."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from ..design import format_value
+from .common import console, design_argument, emit_json, get_design, heading, json_option, physics_options, values_dict
+
+
+@click.command()
+@design_argument
+@click.option("--sims", type=int, default=10_000, show_default=True, help="Number of simulated drops.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed: the same seed gives the same counts.")
+@click.option("--workers", type=int, default=None, help="Worker processes (default: all cores).")
+@click.option("--scheduler", default=None, metavar="ADDRESS", help="Run on this Dask scheduler (tcp://host:8786).")
+@click.option("--plot", "plot_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Write a bar chart to FILE (.png or .svg).")  # fmt: skip
+@click.option(
+    "--fill", type=click.Choice(["solid", "shell", "print"]), default=None, help="Override the design's fill."
+)
+@click.option("--target", default=None, help="Override the design's target distribution.")
+@physics_options
+@json_option
+def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, target, as_json, **physics) -> None:
+    """Drop DESIGN many times in pybullet and test the counts against its target."""
+    import os
+    from dataclasses import replace
+
+    from ..errors import PhysicsError
+    from ..files import atomic_write, ensure_dir
+    from ..models import value_probabilities
+    from ..physics import PhysicsSettings, SimulationInterrupted, plot_validation, simulate
+    from ..stats import goodness_of_fit
+
+    d = get_design(design, params, target)
+    if fill:
+        d = replace(d, fill=replace(d.fill, kind=fill))
+    settings = PhysicsSettings.from_mapping(d.physics, **physics)
+    if plot_file is not None:
+        if plot_file.suffix.lower() not in (".png", ".svg"):
+            raise click.BadParameter(f"{plot_file} must end in .png or .svg", param_hint="--plot")
+        ensure_dir(plot_file.parent)
+    bar = None
+    if sys.stderr.isatty():
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+        bar = Progress(TextColumn("drops"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
+                       console=console(stderr=True), transient=True)  # fmt: skip
+    try:
+        if bar is None:
+            result = simulate(d, sims, seed=seed, workers=workers, settings=settings, scheduler=scheduler)
+        else:
+            with bar:
+                task = bar.add_task("drops", total=sims)
+                result = simulate(d, sims, seed=seed, workers=workers, settings=settings, scheduler=scheduler,
+                                  progress=lambda done, total: bar.update(task, completed=done))  # fmt: skip
+    except SimulationInterrupted as exc:
+        click.echo(f"diefab: interrupted after {exc.done} of {exc.total} drops had finished", err=True)
+        raise click.exceptions.Exit(130) from None
+    if result.landed == 0:
+        raise PhysicsError(f"no drop came to rest on a face ({result.cocked} cocked, {result.unsettled} unsettled)")
+    counts = result.value_counts(d)
+    goal = d.target_distribution.aligned(d.support)
+    fit = goodness_of_fit(counts, goal, seed=seed)
+    model = value_probabilities(d, "solid-angle")
+    keys = [str(v) for v in d.support]
+    out = {
+        "design": d.name,
+        "params": dict(d.params),
+        "fill": d.fill.kind,
+        "target": d.target,
+        "n": result.n,
+        "landed": result.landed,
+        "counts": dict(zip(keys, counts.tolist())),
+        "face_counts": dict(zip(result.faces, result.face_counts.tolist())),
+        "probabilities": values_dict(d, fit.observed),
+        "intervals": {k: [float(lo), float(hi)] for k, (lo, hi) in zip(keys, fit.intervals)},
+        "target_probabilities": values_dict(d, goal),
+        "solid_angle": values_dict(d, model),
+        "cocked": result.cocked,
+        "unsettled": result.unsettled,
+        "chi2": fit.chi2,
+        "df": fit.df,
+        "p_value": fit.p_value,
+        "p_value_mc": fit.p_value_mc,
+        "tvd": fit.tvd,
+        "expected_tvd": fit.expected_tvd,
+        "jsd": fit.jsd,
+        "expected_jsd": fit.expected_jsd,
+        "seed": seed,
+        "workers": "dask" if scheduler else (workers or os.cpu_count()),
+        "seconds": result.seconds,
+        "drops_per_second": result.drops_per_second,
+        "settings": settings.as_dict(),
+    }
+    if plot_file is not None:
+        atomic_write(plot_file, plot_validation(d, result, fmt=plot_file.suffix.lower()[1:]))
+    if as_json:
+        emit_json(out)
+        return
+    from rich.table import Table
+
+    con = console()
+    con.print(heading(d, fill=d.fill.kind, target=d.target))
+    table = Table("value", "count", "simulated", "95% simultaneous CI", "target", "solid angle")
+    signed = min(d.support) < 0
+    for k, v in enumerate(d.support):
+        lo, hi = fit.intervals[k]
+        table.add_row(format_value(v, signed), str(counts[k]), f"{fit.observed[k]:.4f}", f"[{lo:.4f}, {hi:.4f}]",
+                      f"{goal[k]:.4f}", f"{model[k]:.4f}")  # fmt: skip
+    con.print(table)
+    con.print("faces: " + "  ".join(f"{n}={c}" for n, c in zip(result.faces, result.face_counts)))
+    con.print(
+        f"{result.n} drops: {result.landed} on a face, {result.cocked} cocked, {result.unsettled} unsettled; "
+        f"{result.seconds:.1f} s, {result.drops_per_second:,.0f} drops/s"
+    )
+    con.print(f"chi2 = {fit.chi2:.3f} (df {fit.df}), p = {fit.p_value:.4g} (Monte-Carlo {fit.p_value_mc:.4g})")
+    con.print(f"TVD = {fit.tvd:.4f} (expected under the target {fit.expected_tvd:.4f})   "
+              f"JSD = {fit.jsd:.5f} (expected {fit.expected_jsd:.5f})")  # fmt: skip
+    if plot_file is not None:
+        con.print(f"wrote {plot_file}")
