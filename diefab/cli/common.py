@@ -148,6 +148,27 @@ def simulation_options(func):
     return func
 
 
+def physics_file_option(func):
+    """``--physics PROFILE``: a shipped physics profile's name or a TOML file with a [physics] table."""
+    return click.option(
+        "--physics",
+        "physics_profile",
+        default=None,
+        metavar="PROFILE",
+        help="Physics profile: a TOML file with a [physics] table (e.g. from diefab calibrate) or a shipped "
+        "profile's name; it overrides the design's [physics] table, the physics options override it.",
+    )(func)
+
+
+def physics_settings(design: Design, profile: str | None = None, **overrides):
+    """The design's [physics] table, then `profile` (a name or file), then the command-line `overrides`."""
+    from ..physics import PhysicsSettings, load_profile
+
+    if profile is None:
+        return PhysicsSettings.from_mapping(design.physics, **overrides)
+    return load_profile(profile, base=design.physics, **overrides)
+
+
 def physics_options(func):
     """Options that override the design's [physics] table (see diefab.physics.PhysicsSettings)."""
     options = [

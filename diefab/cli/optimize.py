@@ -18,6 +18,8 @@ from .common import (
     json_option,
     note_fast_fill,
     out_option,
+    physics_file_option,
+    physics_settings,
     simulation_options,
     values_dict,
 )
@@ -50,24 +52,29 @@ from .common import (
 @click.option("--objective", type=click.Choice(["eq2", "tvd", "jsd"]), default="eq2", show_default=True)
 @click.option("--name", default=None, help="Name of the optimized design (default DESIGN-MODEL-opt).")
 @simulation_options
+@physics_file_option
 @out_option
 @json_option
 @click.pass_context
-def optimize(ctx, design, params, model, target, seed, min_margin, starts, free, objective, name, out_dir, as_json,
-             **sim) -> None:  # fmt: skip
+def optimize(ctx, design, params, model, target, seed, min_margin, starts, free, objective, name, physics_profile,
+             out_dir, as_json, **sim) -> None:  # fmt: skip
     """Fit DESIGN's parameters to its target; write the result as a template TOML.
 
     With --model simulation the objective uses pybullet drop frequencies
     (diefab validate's physics); the run is logged in OUT/NAME/ and can be
-    resumed with --resume OUT/NAME.
+    resumed with --resume OUT/NAME.  --physics PROFILE sets its physics.
     """
     from ..design import design_to_toml
     from ..optimize import optimize_design
 
     if model == "simulation":
         return optimize_simulation(ctx, design, params, target, seed, min_margin, starts, free, objective, name,
-                                   out_dir, as_json, **sim)  # fmt: skip
+                                   physics_profile, out_dir, as_json, **sim)  # fmt: skip
     d = get_design(design, params, target)
+    if physics_profile is not None:
+        physics_settings(d, physics_profile)  # a bad profile is an error whatever the model
+        click.echo(f"note: --physics only changes --model simulation; the {model} model does not simulate",
+                   err=True)  # fmt: skip
     if not np.isfinite(min_margin) or min_margin < 0:
         raise click.BadParameter(f"{min_margin} must be a non-negative number", param_hint="--min-margin")
     names = free_parameters(d, free)
@@ -168,13 +175,12 @@ def _simulation_view(spec, budget_s: float, history):
     return live, update
 
 
-def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, free, objective, name, out_dir,
-                        as_json, sims_per_eval, max_sims_per_eval, budget, resume, method, start_model, sigma,
-                        max_evals, workers, scheduler) -> None:  # fmt: skip
+def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, free, objective, name,
+                        physics_profile, out_dir, as_json, sims_per_eval, max_sims_per_eval, budget, resume, method,
+                        start_model, sigma, max_evals, workers, scheduler) -> None:  # fmt: skip
     """``diefab optimize DESIGN --model simulation``: see :mod:`diefab.simopt`."""
     from ..design import design_to_toml
     from ..families import family
-    from ..physics import PhysicsSettings
     from ..simopt import RunError, RunLog, RunSpec, best_design, optimize_by_simulation, start_point
 
     if not (np.isfinite(budget) and budget > 0):
@@ -209,6 +215,8 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
             if source is not None and source.name == "COMMANDLINE" and value != getattr(spec, key):
                 raise RunError(f"--{key.replace('_', '-')} {value} differs from the run's {getattr(spec, key)} "
                                f"(stored in {log.spec_path})")  # fmt: skip
+        if physics_profile is not None and physics_settings(d, physics_profile).as_dict() != spec.physics:
+            raise RunError(f"--physics {physics_profile} differs from the run's physics (stored in {log.spec_path})")
         history, warning = log.read()
         run_name = Path(resume).name
     else:
@@ -217,7 +225,7 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         log = RunLog(out_dir / run_name)
         if log.path.exists():
             raise RunError(f"{log.folder} already holds a run: resume it with --resume {log.folder} or pick --name")
-        physics = PhysicsSettings.from_mapping(d.physics)
+        physics = physics_settings(d, physics_profile)
         x0 = start_point(d, names, model=start_model, objective=objective, min_margin=min_margin, starts=starts,
                          seed=seed)  # fmt: skip
         spec = RunSpec(

@@ -8,7 +8,18 @@ from pathlib import Path
 import click
 
 from ..design import format_value
-from .common import console, design_argument, emit_json, get_design, heading, json_option, physics_options, values_dict
+from .common import (
+    console,
+    design_argument,
+    emit_json,
+    get_design,
+    heading,
+    json_option,
+    physics_file_option,
+    physics_options,
+    physics_settings,
+    values_dict,
+)
 
 
 @click.command()
@@ -23,9 +34,11 @@ from .common import console, design_argument, emit_json, get_design, heading, js
     "--fill", type=click.Choice(["solid", "shell", "print"]), default=None, help="Override the design's fill."
 )
 @click.option("--target", default=None, help="Override the design's target distribution.")
+@physics_file_option
 @physics_options
 @json_option
-def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, target, as_json, **physics) -> None:
+def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, target, physics_profile, as_json,
+             **physics) -> None:  # fmt: skip
     """Drop DESIGN many times in pybullet and test the counts against its target."""
     import os
     from dataclasses import replace
@@ -33,13 +46,13 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, ta
     from ..errors import PhysicsError
     from ..files import atomic_write, ensure_dir
     from ..models import value_probabilities
-    from ..physics import PhysicsSettings, SimulationInterrupted, plot_validation, simulate
+    from ..physics import SimulationInterrupted, plot_validation, simulate
     from ..stats import goodness_of_fit
 
     d = get_design(design, params, target)
     if fill:
         d = replace(d, fill=replace(d.fill, kind=fill))
-    settings = PhysicsSettings.from_mapping(d.physics, **physics)
+    settings = physics_settings(d, physics_profile, **physics)
     if plot_file is not None:
         if plot_file.suffix.lower() not in (".png", ".svg"):
             raise click.BadParameter(f"{plot_file} must end in .png or .svg", param_hint="--plot")
