@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from diefab.errors import PhysicsError
@@ -68,3 +69,173 @@ def test_cli_validate_uses_profile_then_options(tmp_path, run):
     assert code == 0, err
     settings = json.loads(out)["settings"]
     assert (settings["restitution"], settings["friction"], settings["angular_velocity"]) == (0.5, 0.5, [0.0, 20.0])
+
+
+# ----------------------------------------------------------------------
+# calibration
+
+
+@pytest.fixture(scope="module")
+def cube_die():
+    from diefab.calibrate import real_die
+    from diefab.design import load_design
+
+    return real_die("cube", load_design("d6"), "10,11,9,10,12,8")
+
+
+def test_deviance_is_zero_at_the_frequencies_and_positive_elsewhere():
+    from diefab.calibrate import deviance
+
+    c = np.array([3, 7, 10])
+    assert deviance(c, c / c.sum()) == pytest.approx(0.0, abs=1e-12)
+    assert deviance(c, [1 / 3, 1 / 3, 1 / 3]) > 0
+
+
+def test_smoothing_keeps_unsimulated_values_possible():
+    from diefab.calibrate import smoothed
+
+    p = smoothed([0, 10, 30])
+    assert p.sum() == pytest.approx(1.0) and p[0] > 0 and p[0] == pytest.approx(0.5 / 41.5)
+
+
+def test_groups_average_within_a_mirror_pair():
+    from diefab.calibrate import RealDie
+    from diefab.design import load_design
+
+    die = RealDie("cube", load_design("d6"), np.array([1, 2, 3, 4, 5, 6]), groups=((0, 5),))
+    assert die.symmetrized(np.array([0.1, 0.2, 0.2, 0.2, 0.1, 0.2]))[[0, 5]] == pytest.approx([0.15, 0.15])
+
+
+def test_settings_at_sets_the_top_of_a_range():
+    from diefab.calibrate import parameter_value, settings_at
+
+    s = settings_at(PhysicsSettings(angular_velocity=(2.0, 10.0)), ["spin", "restitution"], [25.0, 0.6])
+    assert s.angular_velocity == (2.0, 25.0) and s.restitution == 0.6
+    assert parameter_value(s, "spin") == 25.0
+    assert settings_at(PhysicsSettings(angular_velocity=(2.0, 10.0)), ["spin"], [1.0]).angular_velocity == (1.0, 1.0)
+
+
+def test_spec_starts_at_the_base_settings_and_keeps_dice_above_ground(cube_die):
+    from diefab.calibrate import CalibrationSpec, make_spec
+    from diefab.physics import _body
+
+    spec = make_spec([cube_die], free=["restitution", "drop_height"], bounds={"drop_height": (0.1, 8.0)})
+    assert spec.values(spec.x0) == pytest.approx([0.3, 5.0])
+    assert spec.bounds[1][0] > _body(cube_die.design).radius + PhysicsSettings().height_jitter
+    again = CalibrationSpec.from_json(spec.to_json())
+    assert again == spec and again.real_dice[0].counts.tolist() == cube_die.counts.tolist()
+
+
+@pytest.mark.parametrize(
+    "kwargs, words",
+    [
+        ({"free": ["spinn"]}, "not a calibration parameter"),
+        ({"free": []}, "no physics parameter"),
+        ({"free": ["spin", "spin"]}, "name one twice"),
+        ({"bounds": {"spin": (5.0, 1.0)}}, "low < high"),
+        ({"sims_per_eval": 0}, "drops per evaluation"),
+    ],
+)
+def test_bad_spec(cube_die, kwargs, words):
+    from diefab.calibrate import CalibrationError, make_spec
+
+    with pytest.raises(CalibrationError, match=words):
+        make_spec([cube_die], **kwargs)
+
+
+def test_bad_counts():
+    from diefab.calibrate import CalibrationError, real_die
+    from diefab.design import load_design
+
+    for counts, words in (("1,2,3", "6 values"), ("1,2,3,4,5,-6", "negative"), ("0,0,0,0,0,0", "no real rolls")):
+        with pytest.raises(CalibrationError, match=words):
+            real_die("cube", load_design("d6"), counts)
+
+
+def _quadratic(spec, centre, hessian):
+    """A fake objective: total deviance (x - centre)' H (x - centre) / 2 in the unit cube, plus 10."""
+
+    def objective(x, drops):
+        x = np.clip(np.asarray(x, float), 0, 1)
+        dx = x - centre
+        dev = 10.0 + 0.5 * dx @ hessian @ dx
+        return {"x": x.tolist(), "params": dict(zip(spec.names, spec.values(x).tolist())), "drops": int(drops),
+                "objective": dev / 100, "deviance": dev, "feasible": True, "dice": []}  # fmt: skip
+
+    return objective
+
+
+def test_curvature_recovers_the_standard_errors_of_a_quadratic(cube_die):
+    from diefab.calibrate import curvature, make_spec
+
+    spec = make_spec([cube_die], free=["restitution", "spin"])
+    h = np.array([[400.0, 100.0], [100.0, 200.0]])
+    objective = _quadratic(spec, np.array([0.4, 0.6]), h)
+    rng = np.random.default_rng(0)
+    records = [objective(np.array([0.4, 0.6]) + 0.05 * rng.standard_normal(2), 100) for _ in range(30)]
+    best = objective(np.array([0.4, 0.6]), 100)
+    fitted = curvature(records, spec, best)
+    se = np.sqrt(np.diag(2 * np.linalg.inv(h))) * np.diff(np.array(spec.bounds), axis=1)[:, 0]
+    assert [fitted[n]["se"] for n in spec.names] == pytest.approx(se.tolist(), rel=1e-6)
+
+
+def test_curvature_leaves_a_flat_direction_undetermined(cube_die):
+    from diefab.calibrate import curvature, make_spec
+
+    spec = make_spec([cube_die], free=["restitution", "spin"])
+    objective = _quadratic(spec, np.array([0.4, 0.6]), np.array([[400.0, 0.0], [0.0, 0.0]]))
+    rng = np.random.default_rng(1)
+    records = [objective(np.array([0.4, 0.6]) + 0.05 * rng.standard_normal(2), 100) for _ in range(30)]
+    fitted = curvature(records, spec, objective(np.array([0.4, 0.6]), 100))
+    assert fitted["restitution"]["se"] is not None and fitted["spin"]["se"] is None
+
+
+def test_driver_finds_the_minimum_and_a_resumed_run_continues_it(cube_die):
+    from diefab.calibrate import calibrate, make_spec
+
+    spec = make_spec([cube_die], free=["restitution", "spin"], sims_per_eval=100, max_sims=100)
+    objective = _quadratic(spec, np.array([0.7, 0.2]), np.diag([50.0, 50.0]))
+    full: list = []
+    whole = calibrate(spec, objective=objective, on_evaluation=full.append, max_evaluations=120)
+    assert whole.best["x"] == pytest.approx([0.7, 0.2], abs=0.02)
+    first: list = []
+    calibrate(spec, objective=objective, on_evaluation=first.append, max_evaluations=50)
+    rest: list = []
+    again = calibrate(spec, objective=objective, history=first, on_evaluation=rest.append, max_evaluations=120)
+    assert again.replayed == 50 and [r["x"] for r in first + rest] == [r["x"] for r in full]
+
+
+@pytest.mark.parametrize(
+    "args, words",
+    [
+        ([], "at least one die"),
+        (["--die", "d6", "1,2,3"], "6 values"),
+        (["--die", "d6", "1,1,1,1,1,1", "--free", "spinn"], "not a calibration parameter"),
+        (["--die", "d6", "1,1,1,1,1,1", "--bound", "spin=3"], "NAME=LOW:HIGH"),
+        (["--die", "d6", "1,1,1,1,1,1", "--sims-per-eval", "0"], "must be > 0"),
+        (["--die", "d6", "1,1,1,1,1,1", "--name", "../x"], "plain name"),
+        (["--die", "nope", "1,1,1,1,1,1"], "unknown template"),
+        (["--resume", "nowhere"], "does not exist"),
+    ],
+)
+def test_cli_bad_input_is_one_line_exit_2(tmp_path, bad, monkeypatch, args, words):
+    monkeypatch.chdir(tmp_path)
+    assert words in bad("calibrate", *args)
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").rglob("*.toml"))
+
+
+def test_cli_calibrates_writes_a_profile_and_resumes(tmp_path, run):
+    args = ["calibrate", "--die", "d6", "10,11,9,10,12,8", "--free", "restitution", "--sims-per-eval", "30",
+            "--workers", "1", "--out", tmp_path, "--json"]  # fmt: skip
+    code, out, err = run(*args, "--max-evals", "3")
+    assert code == 0, err
+    report = json.loads(out)
+    assert report["evaluations"] == 3 and not report["finished"]
+    settings = load_profile(report["profile"])
+    assert settings.restitution == pytest.approx(report["fitted"]["restitution"]["value"])
+    code, out, err = run("calibrate", "--resume", tmp_path / "calibrated", "--max-evals", "5", "--json")
+    assert code == 0, err
+    again = json.loads(out)
+    assert (again["evaluations"], again["replayed"]) == (5, 3)
+    assert len((tmp_path / "calibrated" / "evaluations.jsonl").read_text().splitlines()) == 5
+    assert "already holds a run" in run(*args)[2]

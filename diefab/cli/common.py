@@ -198,3 +198,29 @@ def physics_options(func):
     func = click.option("--linear-velocity", type=(float, float), default=None, metavar="MIN MAX",
                         help="Range of the initial horizontal speed, units/s (default 0 0).")(func)  # fmt: skip
     return func
+
+
+def run_logged(call, log, live, client, resume: str):
+    """``call()`` with the run `log` open and the `live` panel shown; Ctrl-C says how to resume.
+
+    Closes the log, the panel and the Dask `client` (if any) however the run ends.
+    """
+    import sys
+
+    log.open()
+    try:
+        if live:
+            live.start()
+        return call()
+    except KeyboardInterrupt:
+        if live:
+            live.stop()
+        log.close()
+        click.echo(f"diefab: interrupted; resume with: {resume}", err=True)
+        sys.exit(130)
+    finally:
+        if live:
+            live.stop()
+        log.close()
+        if client is not None:
+            client.close()

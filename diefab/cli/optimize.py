@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import click
@@ -20,6 +19,7 @@ from .common import (
     out_option,
     physics_file_option,
     physics_settings,
+    run_logged,
     simulation_options,
     values_dict,
 )
@@ -261,27 +261,13 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         if update:
             update(record=record)
 
-    log.open()
-    try:
-        if live:
-            live.start()
-        result = optimize_by_simulation(
+    result = run_logged(
+        lambda: optimize_by_simulation(
             spec, workers=workers, scheduler=client, history=history, on_evaluation=on_evaluation, on_best=on_best,
             budget_seconds=budget * 60, max_evaluations=max_evals,
-        )  # fmt: skip
-    except KeyboardInterrupt:
-        if live:
-            live.stop()
-        log.close()
-        click.echo(f"diefab: interrupted; resume with: diefab optimize {design} --model simulation --resume "
-                   f"{log.folder}", err=True)  # fmt: skip
-        sys.exit(130)
-    finally:
-        if live:
-            live.stop()
-        log.close()
-        if client is not None:
-            client.close()
+        ),
+        log, live, client, f"diefab optimize {design} --model simulation --resume {log.folder}",
+    )  # fmt: skip
     if result.best is None:
         raise RunError(f"no stable candidate was simulated in {result.evaluations} evaluations: "
                        "lower --min-margin or change the target")  # fmt: skip

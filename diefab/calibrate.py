@@ -1,0 +1,580 @@
+"""Calibration: fit the physics settings to dice with real rolls.
+
+Simulation is only as good as its throw: restitution, friction, the spin and
+speed of the throw and the drop height all move a die's distribution by more
+than the sampling noise of a few hundred real rolls.  This module fits those
+settings to the real counts of one or more dice (:class:`RealDie`) by
+maximizing the simulated likelihood of the counts:
+
+* each die's value probabilities under a candidate setting are its simulated
+  frequencies, smoothed by half a count per value (a Jeffreys prior), so that
+  a value that was rolled but never simulated costs a finite amount;
+* the objective is the deviance ``G² = 2 Σ c log(c / (n p))`` summed over the
+  dice, divided by the number of real rolls (the deviance per roll; its
+  minimum is the maximum of the likelihood);
+* every candidate drops every die with the same seed (common random numbers):
+  drop *i* starts from the same pose and the same uniform draws, scaled to
+  the candidate's ranges, so the objective is a fixed function of the
+  settings at each drop count and nearby candidates compare without
+  sampling noise between them;
+* the optimizer is :mod:`diefab.simopt`'s (CMA-ES or Nelder-Mead restarts in
+  the unit cube of the free settings, more drops as it converges, the
+  resumable run log), so a run loses nothing and a resumed run continues
+  the trajectory an uninterrupted one would have taken.
+
+Outcomes that the data name only up to relabelling (mirror-image faces whose
+physical labels were not recorded, :attr:`RealDie.groups`) are compared with
+the simulated probabilities averaged within the group, so the labelling
+does not matter.
+
+The uncertainty of the fitted settings comes from the curvature of the
+deviance at the optimum (a quadratic fitted by least squares to the
+evaluations near it): the covariance is ``2 H⁻¹`` where ``H`` is the Hessian
+of the total deviance.  It is the uncertainty due to the finite number of
+real rolls; a flat direction (a setting the counts do not pin down) is
+reported as such, not as a number.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .design import Design
+from .errors import DiefabError, StatsError
+from .simopt import RUN_FORMAT, RunError, RunLog
+
+__all__ = [
+    "DEFAULT_FREE",
+    "PARAMETERS",
+    "CalibrationError",
+    "CalibrationLog",
+    "CalibrationObjective",
+    "CalibrationSpec",
+    "Parameter",
+    "RealDie",
+    "calibrate",
+    "curvature",
+    "deviance",
+    "die_report",
+    "settings_at",
+    "smoothed",
+]
+
+#: Pseudo-count added to each value's simulated count (Jeffreys prior).
+SMOOTHING = 0.5
+
+
+class CalibrationError(DiefabError, ValueError):
+    """Real dice or calibration settings that cannot be used."""
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """A physics setting that calibration can fit.
+
+    ``setting`` is the :class:`diefab.physics.PhysicsSettings` field it
+    changes; for a range (``angular_velocity``, ``linear_velocity``) the
+    parameter is the range's upper end.
+    """
+
+    name: str
+    setting: str
+    low: float
+    high: float
+    unit: str
+    text: str
+
+
+PARAMETERS: dict[str, Parameter] = {
+    p.name: p
+    for p in (
+        Parameter("restitution", "restitution", 0.0, 0.9, "", "restitution of die and ground"),
+        Parameter("friction", "friction", 0.1, 1.5, "", "Coulomb friction of die and ground"),
+        Parameter("rolling_friction", "rolling_friction", 0.0, 0.02, "", "Bullet's rolling friction"),
+        Parameter("spinning_friction", "spinning_friction", 0.0, 0.02, "", "Bullet's spinning friction"),
+        Parameter("spin", "angular_velocity", 0.0, 40.0, "rad/s", "upper end of the initial spin range"),
+        Parameter("speed", "linear_velocity", 0.0, 5.0, "units/s", "upper end of the initial horizontal speed"),
+        Parameter("drop_height", "drop_height", 2.0, 10.0, "units", "drop height of the centre of mass"),
+    )
+}
+#: Fitted unless ``free`` says otherwise.
+DEFAULT_FREE = ("restitution", "friction", "spin", "drop_height")
+
+
+# ----------------------------------------------------------------------
+# real dice
+
+
+@dataclass(frozen=True, eq=False)
+class RealDie:
+    """A die with real rolls.
+
+    Parameters
+    ----------
+    name : str
+    design : Design
+        The die as made (its fill gives the mass properties).
+    counts : (k,) int
+        Real rolls of each value of ``design.support`` (increasing values).
+    groups : tuple of tuple of int
+        Indices into ``design.support`` of values the data name only up to
+        relabelling (mirror-image faces); each group has two or more.
+    reference : mapping str -> (k,) float
+        Other predictions of the die to compare with (e.g. a source's own
+        model), keyed by name.
+    """
+
+    name: str
+    design: Design
+    counts: np.ndarray
+    groups: tuple[tuple[int, ...], ...] = ()
+    reference: Mapping[str, np.ndarray] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        k = len(self.design.support)
+        counts = np.asarray(self.counts)
+        if counts.shape != (k,):
+            raise CalibrationError(
+                f"die {self.name!r}: {counts.size} counts for the {k} values {self.design.support} of "
+                f"{self.design.name!r}"
+            )
+        if not np.all(np.isfinite(counts)) or np.any(counts < 0) or np.any(counts != np.round(counts)):
+            raise CalibrationError(f"die {self.name!r}: counts {counts.tolist()} must be whole numbers >= 0")
+        if counts.sum() <= 0:
+            raise CalibrationError(f"die {self.name!r}: no real rolls")
+        object.__setattr__(self, "counts", counts.astype(np.int64))
+        seen: set[int] = set()
+        for g in self.groups:
+            if len(g) < 2 or any(not 0 <= i < k for i in g) or seen & set(g):
+                raise CalibrationError(f"die {self.name!r}: group {list(g)} must name two or more distinct values")
+            seen |= set(g)
+        object.__setattr__(self, "groups", tuple(tuple(int(i) for i in g) for g in self.groups))
+        ref = {}
+        for key, p in self.reference.items():
+            p = np.asarray(p, dtype=float)
+            if p.shape != (k,) or not np.all(np.isfinite(p)) or np.any(p < 0) or p.sum() <= 0:
+                raise CalibrationError(f"die {self.name!r}: reference {key!r} is not a distribution over {k} values")
+            ref[key] = p / p.sum()
+        object.__setattr__(self, "reference", ref)
+
+    @property
+    def n(self) -> int:
+        """Real rolls."""
+        return int(self.counts.sum())
+
+    @property
+    def frequencies(self) -> np.ndarray:
+        return self.counts / self.n
+
+    def symmetrized(self, p: np.ndarray) -> np.ndarray:
+        """`p` with each group's probabilities replaced by their mean."""
+        p = np.array(p, dtype=float)
+        for g in self.groups:
+            p[list(g)] = p[list(g)].mean()
+        return p
+
+    def to_json(self) -> dict[str, Any]:
+        from .design import design_to_toml
+
+        return {
+            "name": self.name,
+            "design_toml": design_to_toml(self.design),
+            "counts": self.counts.tolist(),
+            "groups": [list(g) for g in self.groups],
+            "reference": {k: v.tolist() for k, v in self.reference.items()},
+        }
+
+    @classmethod
+    def from_json(cls, data: Mapping[str, Any]) -> RealDie:
+        from .design import parse_design
+
+        design = parse_design(data["design_toml"], source=f"die {data['name']!r}")
+        return cls(data["name"], design, np.array(data["counts"]), tuple(tuple(g) for g in data.get("groups", ())),
+                   {k: np.array(v) for k, v in data.get("reference", {}).items()})  # fmt: skip
+
+
+def real_die(name: str, design: Design, counts: Sequence[int] | str, **kwargs: Any) -> RealDie:
+    """A :class:`RealDie` from counts per value or a roll-log path (see :func:`diefab.stats.read_rolls`)."""
+    from pathlib import Path
+
+    from .stats import counts_from_rolls, parse_counts, read_rolls
+
+    try:
+        if isinstance(counts, str):
+            path = Path(counts)
+            if path.is_file():
+                counts = counts_from_rolls(read_rolls(path), design.support)
+            else:
+                counts = parse_counts(counts)
+    except StatsError as exc:
+        raise CalibrationError(f"die {name!r}: {exc}") from None
+    return RealDie(name, design, np.asarray(counts), **kwargs)
+
+
+# ----------------------------------------------------------------------
+# the likelihood
+
+
+def smoothed(counts: np.ndarray, prior: float = SMOOTHING) -> np.ndarray:
+    """Simulated counts -> probabilities with `prior` pseudo-counts per value."""
+    counts = np.asarray(counts, dtype=float)
+    return (counts + prior) / (counts.sum() + prior * len(counts))
+
+
+def deviance(counts: np.ndarray, p: np.ndarray) -> float:
+    """``G² = 2 Σ c log(c / (n p))`` of real `counts` against probabilities `p` (0 log 0 = 0).
+
+    Examples
+    --------
+    >>> deviance([10, 10], [0.5, 0.5])
+    0.0
+    >>> round(deviance([20, 0], [0.5, 0.5]), 4)  # 2 * 20 * log 2
+    27.7259
+    """
+    c = np.asarray(counts, dtype=float)
+    p = np.asarray(p, dtype=float)
+    n = c.sum()
+    m = c > 0
+    return float(2.0 * np.sum(c[m] * np.log(c[m] / (n * p[m]))))
+
+
+def settings_at(base, names: Sequence[str], values: Sequence[float]):
+    """`base` (:class:`diefab.physics.PhysicsSettings`) with the calibration parameters `names` set to `values`."""
+    from dataclasses import replace
+
+    changes: dict[str, Any] = {}
+    for name, value in zip(names, values):
+        p = PARAMETERS[name]
+        value = float(value)
+        if p.setting in ("angular_velocity", "linear_velocity"):
+            lo = getattr(base, p.setting)[0]
+            changes[p.setting] = (min(lo, value), value)
+        else:
+            changes[p.setting] = value
+    return replace(base, **changes)
+
+
+def parameter_value(settings, name: str) -> float:
+    """The value of calibration parameter `name` in `settings`."""
+    value = getattr(settings, PARAMETERS[name].setting)
+    return float(value[1] if isinstance(value, tuple) else value)
+
+
+# ----------------------------------------------------------------------
+# run description
+
+
+@dataclass(frozen=True)
+class CalibrationSpec:
+    """Everything that determines a calibration run (stored as ``run.json``).
+
+    The fields the optimizer reads (`names`, `x0`, `seed`, `sims_per_eval`,
+    `max_sims`, `method`, `sigma0`) mean what they mean in
+    :class:`diefab.simopt.RunSpec`; `bounds` maps the unit cube to the
+    settings and `physics` holds the settings that are not fitted.
+    """
+
+    dice: tuple[dict[str, Any], ...]
+    names: tuple[str, ...]
+    bounds: tuple[tuple[float, float], ...]
+    x0: tuple[float, ...]
+    seed: int = 0
+    sims_per_eval: int = 1000
+    max_sims: int = 8000
+    method: str = "cma"
+    sigma0: float = 0.2
+    physics: dict[str, Any] = field(default_factory=dict)
+    objective: str = "deviance"
+    format: int = RUN_FORMAT
+
+    def __post_init__(self) -> None:
+        def bad(msg: str) -> None:
+            raise CalibrationError(msg)
+
+        if not self.dice:
+            bad("calibration needs at least one die with real rolls")
+        names = [d["name"] for d in self.dice]
+        if len(set(names)) != len(names):
+            bad(f"two dice are called {next(n for n in names if names.count(n) > 1)!r}: give them different names")
+        if not self.names:
+            bad("no physics parameter is free")
+        unknown = [n for n in self.names if n not in PARAMETERS]
+        if unknown:
+            bad(f"{unknown[0]!r} is not a calibration parameter (parameters: {', '.join(PARAMETERS)})")
+        if len(set(self.names)) != len(self.names):
+            bad(f"parameters {list(self.names)} name one twice")
+        if len(self.bounds) != len(self.names) or len(self.x0) != len(self.names):
+            bad(f"bounds and x0 must have one entry per parameter {list(self.names)}")
+        for name, (lo, hi) in zip(self.names, self.bounds):
+            if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+                bad(f"bounds of {name} [{lo}, {hi}] must be finite with low < high")
+        for name in ("seed", "sims_per_eval", "max_sims"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+                bad(f"{name}={value!r} must be an integer")
+        if self.seed < 0:
+            bad(f"seed={self.seed} must be >= 0")
+        if not 1 <= self.sims_per_eval <= self.max_sims:
+            bad(f"drops per evaluation {self.sims_per_eval} must be >= 1 and <= max {self.max_sims}")
+        if self.method not in ("cma", "nm"):
+            bad(f"method={self.method!r} must be cma or nm")
+        if not (math.isfinite(self.sigma0) and 0 < self.sigma0 <= 0.5):
+            bad(f"sigma0={self.sigma0} must be in (0, 0.5]")
+
+    @property
+    def real_dice(self) -> list[RealDie]:
+        return [RealDie.from_json(d) for d in self.dice]
+
+    @property
+    def base(self):
+        from .physics import PhysicsSettings
+
+        return PhysicsSettings.from_mapping(self.physics)
+
+    def values(self, x: Sequence[float]) -> np.ndarray:
+        """Unit-cube point -> parameter values."""
+        lo, hi = np.array(self.bounds).T
+        return lo + np.clip(np.asarray(x, dtype=float), 0.0, 1.0) * (hi - lo)
+
+    def unit(self, values: Sequence[float]) -> np.ndarray:
+        lo, hi = np.array(self.bounds).T
+        return (np.asarray(values, dtype=float) - lo) / (hi - lo)
+
+    def settings(self, x: Sequence[float]):
+        return settings_at(self.base, self.names, self.values(x))
+
+    def to_json(self) -> str:
+        data = asdict(self)
+        data["dice"], data["names"] = list(self.dice), list(self.names)
+        data["bounds"], data["x0"] = [list(b) for b in self.bounds], list(self.x0)
+        return json.dumps(data, indent=2) + "\n"
+
+    @classmethod
+    def from_json(cls, text: str, source: str = "run.json") -> CalibrationSpec:
+        try:
+            data = json.loads(text)
+            data["dice"], data["names"] = tuple(data["dice"]), tuple(data["names"])
+            data["bounds"] = tuple((float(lo), float(hi)) for lo, hi in data["bounds"])
+            data["x0"] = tuple(float(v) for v in data["x0"])
+            if data.get("objective") != "deviance":
+                raise ValueError("not a calibration run")
+            return cls(**data)
+        except (ValueError, KeyError, TypeError) as exc:
+            raise RunError(f"{source} is not a diefab calibration run: {exc}") from None
+
+
+class CalibrationLog(RunLog):
+    """A calibration run folder: ``run.json`` (:class:`CalibrationSpec`) and ``evaluations.jsonl``."""
+
+    def spec(self) -> CalibrationSpec:
+        if not self.folder.is_dir():
+            raise RunError(f"resume folder {self.folder} does not exist")
+        if not self.spec_path.is_file() or not self.path.is_file():
+            raise RunError(f"{self.folder} is not a diefab run folder (no run.json or evaluations.jsonl)")
+        return CalibrationSpec.from_json(self.spec_path.read_text(encoding="utf-8"), str(self.spec_path))
+
+
+def make_spec(
+    dice: Sequence[RealDie],
+    *,
+    free: Sequence[str] = DEFAULT_FREE,
+    base=None,
+    bounds: Mapping[str, tuple[float, float]] | None = None,
+    **options: Any,
+) -> CalibrationSpec:
+    """A :class:`CalibrationSpec` starting from `base` settings (default: the paper's).
+
+    The drop height's lower bound is raised so that every die starts above
+    the ground; the start is `base`'s own values, clipped into the bounds.
+    """
+    from .physics import PhysicsSettings, _body
+
+    base = base or PhysicsSettings()
+    bounds = dict(bounds or {})
+    unknown = [n for n in list(free) + list(bounds) if n not in PARAMETERS]
+    if unknown:
+        raise CalibrationError(f"{unknown[0]!r} is not a calibration parameter (parameters: {', '.join(PARAMETERS)})")
+    box = []
+    for name in free:
+        lo, hi = bounds.get(name, (PARAMETERS[name].low, PARAMETERS[name].high))
+        if name == "drop_height" and dice:
+            lowest = max(_body(d.design).radius for d in dice) + base.height_jitter + 0.05
+            lo = max(lo, lowest)
+            if hi <= lo:
+                raise CalibrationError(f"drop_height bounds must reach above {lowest:.3f} (the dice's radius + jitter)")
+        box.append((float(lo), float(hi)))
+    lo, hi = np.array(box).T if box else (np.zeros(0), np.zeros(0))
+    start = [parameter_value(base, n) for n in free]
+    x0 = np.clip((np.array(start) - lo) / (hi - lo), 0.0, 1.0) if box else np.zeros(0)
+    return CalibrationSpec(
+        dice=tuple(d.to_json() for d in dice), names=tuple(free), bounds=tuple(box),
+        x0=tuple(float(v) for v in x0), physics=base.as_dict(), **options,
+    )  # fmt: skip
+
+
+# ----------------------------------------------------------------------
+# the objective
+
+
+class CalibrationObjective:
+    """Deviance per real roll of the dice's counts under a candidate's simulated frequencies.
+
+    Parameters
+    ----------
+    spec : CalibrationSpec
+    workers, scheduler
+        Passed to :func:`diefab.physics.simulate`.
+    """
+
+    def __init__(self, spec: CalibrationSpec, *, workers: int | None = None, scheduler=None) -> None:
+        self.spec = spec
+        self.dice = spec.real_dice
+        self.workers, self.scheduler = workers, scheduler
+        self.rolls = sum(d.n for d in self.dice)
+
+    def __call__(self, x: np.ndarray, drops: int) -> dict[str, Any]:
+        """Evaluate unit-cube point `x` with `drops` drops of every die; a JSON-ready record."""
+        from .errors import PhysicsError
+
+        x = np.clip(np.asarray(x, dtype=float), 0.0, 1.0)
+        values = self.spec.values(x)
+        record: dict[str, Any] = {"x": x.tolist(), "params": dict(zip(self.spec.names, values.tolist())), "drops": 0}
+        try:
+            settings = settings_at(self.spec.base, self.spec.names, values)
+        except PhysicsError as exc:  # a combination the engine cannot take
+            return {**record, "objective": 1e6, "feasible": False, "error": str(exc)}
+        dice = [simulate_die(d, settings, int(drops), self.spec.seed, self.workers, self.scheduler) for d in self.dice]
+        total = sum(d["deviance"] for d in dice)
+        return {
+            **record,
+            "drops": int(drops),  # per die: the driver compares like with like by this count
+            "objective": total / self.rolls,
+            "deviance": total,
+            "feasible": True,
+            "dice": dice,
+            "seconds": sum(d["seconds"] for d in dice),
+        }
+
+
+def simulate_die(die: RealDie, settings, drops: int, seed: int, workers=None, scheduler=None) -> dict[str, Any]:
+    """Drop `die` `drops` times under `settings`: its simulated value counts and its fit to the real counts."""
+    from .physics import simulate
+
+    result = simulate(die.design, drops, seed=seed, workers=workers, settings=settings, scheduler=scheduler)
+    counts = result.value_counts(die.design)
+    p = die.symmetrized(smoothed(counts))
+    return {
+        "name": die.name,
+        "counts": counts.tolist(),
+        "cocked": result.cocked,
+        "unsettled": result.unsettled,
+        "deviance": deviance(die.counts, p),
+        "seconds": result.seconds,
+    }
+
+
+def die_report(die: RealDie, sim_counts: Sequence[int]) -> dict[str, Any]:
+    """How well simulated value counts predict `die`'s real rolls.
+
+    ``tvd`` compares the real frequencies with the simulated ones
+    (symmetrized within :attr:`RealDie.groups`); ``noise_tvd`` is the TVD that
+    sampling alone gives at the die's number of rolls
+    (:func:`diefab.stats.expected_tvd_exact`); ``p_value`` is the chi-squared
+    tail of the deviance with k - 1 degrees of freedom (the simulation's own
+    noise and the fit are not counted).
+    """
+    from scipy.stats import chi2
+
+    from .stats import expected_tvd_exact, tvd
+
+    counts = np.asarray(sim_counts, dtype=float)
+    p = die.symmetrized(counts / max(counts.sum(), 1))
+    ps = die.symmetrized(smoothed(counts))
+    g2 = deviance(die.counts, ps)
+    df = len(die.counts) - 1
+    return {
+        "name": die.name,
+        "rolls": die.n,
+        "real": die.frequencies.tolist(),
+        "simulated": p.tolist(),
+        "tvd": tvd(die.frequencies, p),
+        "noise_tvd": expected_tvd_exact(die.frequencies, die.n),
+        "deviance": g2,
+        "df": df,
+        "p_value": float(chi2.sf(g2, df)),
+    }
+
+
+# ----------------------------------------------------------------------
+# uncertainty
+
+
+def curvature(
+    records: Sequence[Mapping[str, Any]], spec: CalibrationSpec, best: Mapping[str, Any]
+) -> dict[str, dict[str, float | None]]:
+    """Standard errors of the fitted parameters from the curvature of the deviance at `best`.
+
+    A quadratic in the parameters is fitted by least squares to the total
+    deviance of the feasible evaluations at `best`'s drop count nearest to
+    it (at least three per coefficient); the covariance is ``2 H⁻¹``.
+    Returns ``{name: {"value", "se"}}``; ``se`` is None for a parameter
+    that leans on a direction along which the fitted deviance is flat or
+    curved downwards (a standard error there would exceed the searched
+    range: the counts do not determine it), and for every parameter when
+    too few evaluations are near.
+    """
+    names = spec.names
+    d = len(names)
+    value = dict(best["params"])
+    out: dict[str, dict[str, float | None]] = {n: {"value": float(value[n]), "se": None} for n in names}
+    pts = [r for r in records if r.get("feasible") and r.get("drops") == best["drops"] and "deviance" in r]
+    ncoef = (d + 1) * (d + 2) // 2
+    if len(pts) < ncoef + 2:
+        return out
+    x0 = np.array(best["x"])
+    xs = np.array([r["x"] for r in pts])
+    order = np.argsort(np.linalg.norm(xs - x0, axis=1))[: max(3 * ncoef, 20)]
+    xs = xs[order] - x0
+    ys = np.array([pts[i]["deviance"] for i in order])
+    iu = np.triu_indices(d)
+    quad = np.einsum("ni,nj->nij", xs, xs)[:, iu[0], iu[1]]
+    design = np.hstack([np.ones((len(xs), 1)), xs, quad])
+    coef, *_ = np.linalg.lstsq(design, ys, rcond=None)
+    h = np.zeros((d, d))
+    h[iu] = coef[1 + d :]
+    h = h + h.T  # the diagonal's coefficient is h_ii / 2, an off-diagonal's is h_ij
+    scale = np.diff(np.array(spec.bounds), axis=1)[:, 0]  # unit cube -> parameter units
+    w, v = np.linalg.eigh(h)
+    # a direction whose standard error would exceed the whole searched range is not determined
+    good = w > 2.0
+    for i, n in enumerate(names):
+        if np.all(np.abs(v[i, ~good]) < 0.1):
+            var = 2.0 * np.sum(v[i, good] ** 2 / w[good])
+            out[n]["se"] = float(np.sqrt(var) * scale[i])
+    return out
+
+
+# ----------------------------------------------------------------------
+# the driver
+
+
+def calibrate(spec: CalibrationSpec, **kwargs: Any):
+    """Minimize the deviance per roll of `spec`'s dice over its free physics settings.
+
+    Takes the keyword arguments of :func:`diefab.simopt.optimize_by_simulation`
+    (workers, scheduler, history, on_evaluation, on_best, budget_seconds,
+    max_evaluations, objective) and returns its
+    :class:`diefab.simopt.SimulationResult`.
+    """
+    from .simopt import optimize_by_simulation
+
+    if kwargs.get("objective") is None:
+        kwargs["objective"] = CalibrationObjective(spec, workers=kwargs.get("workers"),
+                                                   scheduler=kwargs.get("scheduler"))  # fmt: skip
+    return optimize_by_simulation(spec, **kwargs)

@@ -1,0 +1,233 @@
+"""``diefab calibrate``: fit the physics settings to dice with real rolls; write a physics profile."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+import numpy as np
+
+from ..files import atomic_write
+from .common import console, emit_json, get_design, json_option, out_option, physics_file_option, run_logged
+
+
+def _parse_bounds(items: tuple[str, ...]) -> dict[str, tuple[float, float]]:
+    """``("spin=0:20",)`` -> ``{"spin": (0.0, 20.0)}``."""
+    out = {}
+    for item in items:
+        name, sep, rng = item.partition("=")
+        lo, colon, hi = rng.partition(":")
+        try:
+            if not sep or not colon:
+                raise ValueError
+            out[name.strip()] = (float(lo), float(hi))
+        except ValueError:
+            raise click.BadParameter(f"{item!r} is not NAME=LOW:HIGH", param_hint="--bound") from None
+    return out
+
+
+def _dice(die_args):
+    from ..calibrate import real_die
+
+    dice = []
+    for spec, counts in die_args:
+        d = get_design(spec)
+        dice.append(real_die(d.name, d, counts))
+    names: dict[str, int] = {}
+    out = []
+    for die in dice:
+        names[die.name] = names.get(die.name, 0) + 1
+        if names[die.name] > 1:  # the same design with a second set of rolls
+            from dataclasses import replace
+
+            die = replace(die, name=f"{die.name}-{names[die.name]}")
+        out.append(die)
+    return out
+
+
+@click.command()
+@click.option("--die", "die_args", type=(str, str), multiple=True, metavar="DESIGN COUNTS",
+              help="A die with real rolls: a design (template or TOML) and its counts per value, increasing "
+              "(\"0,20,48,...\") or a roll log file (repeatable).")  # fmt: skip
+@click.option("--name", default="calibrated", show_default=True, help="Name of the run and of the profile.")
+@click.option("--free", default=",".join(("restitution", "friction", "spin", "drop_height")), show_default=True,
+              metavar="A,B,...", help="Physics parameters to fit: restitution, friction, rolling_friction, "
+              "spinning_friction, spin (top of the spin range), speed (top of the speed range), "
+              "drop_height.")  # fmt: skip
+@click.option("--bound", "bounds", multiple=True, metavar="NAME=LOW:HIGH", help="Range searched for a parameter.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Physics seed: common random numbers.")
+@click.option("--sims-per-eval", type=int, default=1000, show_default=True,
+              help="Drops of each die per evaluation at the start (doubled as it converges).")  # fmt: skip
+@click.option("--max-sims-per-eval", type=int, default=None, help="Most drops of each die per evaluation (8x).")
+@click.option("--budget", type=float, default=20.0, show_default=True, help="Wall-time budget, minutes.")
+@click.option("--resume", type=click.Path(path_type=Path), default=None, metavar="RUN_DIR",
+              help="Continue the interrupted calibration in RUN_DIR.")  # fmt: skip
+@click.option("--method", type=click.Choice(["cma", "nm"]), default="cma", show_default=True)
+@click.option("--sigma", type=float, default=0.2, show_default=True, help="Initial step, fraction of each range.")
+@click.option("--max-evals", type=int, default=None, help="Stop after this many evaluations.")
+@click.option("--workers", type=int, default=None, help="Worker processes (default all cores).")
+@click.option("--scheduler", default=None, metavar="ADDRESS", help="Dask scheduler address.")
+@physics_file_option
+@out_option
+@json_option
+@click.pass_context
+def calibrate(ctx, die_args, name, free, bounds, seed, sims_per_eval, max_sims_per_eval, budget, resume,
+              method, sigma, max_evals, workers, scheduler, physics_profile, out_dir, as_json) -> None:  # fmt: skip
+    """Fit the physics settings to dice with real rolls and write a physics profile.
+
+    Maximizes the simulated likelihood of the real counts (common random
+    numbers, CMA-ES); reports the fitted values with standard errors and
+    the fit of every die.  The run is logged in OUT/NAME/ and can be
+    resumed with --resume OUT/NAME; the profile OUT/NAME/NAME.toml is what
+    validate and optimize take with --physics.
+    """
+    from ..calibrate import CalibrationError, CalibrationLog, make_spec
+    from ..physics import PhysicsSettings, load_profile
+    from ..simopt import RunError
+
+    for value, hint in ((sims_per_eval, "--sims-per-eval"), (max_evals, "--max-evals"), (workers, "--workers")):
+        if value is not None and value <= 0:
+            raise click.BadParameter(f"{value} must be > 0", param_hint=hint)
+    if max_sims_per_eval is not None and max_sims_per_eval < sims_per_eval:
+        raise click.BadParameter(f"{max_sims_per_eval} must be >= --sims-per-eval", param_hint="--max-sims-per-eval")
+    if not (np.isfinite(budget) and budget > 0):
+        raise click.BadParameter(f"{budget} must be a positive number of minutes", param_hint="--budget")
+    if not name or "/" in name or "\\" in name or name in (".", ".."):
+        raise click.BadParameter(f"{name!r} must be a plain name (no folders)", param_hint="--name")
+    warning = None
+    if resume is not None:
+        log = CalibrationLog(resume)
+        spec = log.spec()
+        for key, value in {"seed": seed, "sims_per_eval": sims_per_eval, "method": method}.items():
+            source = ctx.get_parameter_source(key)
+            if source is not None and source.name == "COMMANDLINE" and value != getattr(spec, key):
+                raise RunError(f"--{key.replace('_', '-')} {value} differs from the run's {getattr(spec, key)} "
+                               f"(stored in {log.spec_path})")  # fmt: skip
+        if die_args:
+            raise RunError(f"a resumed run uses the dice stored in {log.spec_path}: leave out --die")
+        history, warning = log.read()
+        run_name = Path(resume).name
+    else:
+        if not die_args:
+            raise CalibrationError("give at least one die with real rolls: --die DESIGN COUNTS")
+        dice = _dice(die_args)
+        names = [n.strip() for n in free.split(",") if n.strip()]
+        base = load_profile(physics_profile) if physics_profile else PhysicsSettings()
+        spec = make_spec(dice, free=names, base=base, bounds=_parse_bounds(bounds), seed=seed,
+                         sims_per_eval=sims_per_eval, max_sims=max_sims_per_eval or 8 * sims_per_eval, method=method,
+                         sigma0=sigma)  # fmt: skip
+        run_name = name
+        log = CalibrationLog(out_dir / run_name)
+        log.create(spec)
+        history = []
+    if warning:
+        click.echo(f"diefab: warning: {warning}", err=True)
+    run(spec, log, run_name, history, budget, max_evals, workers, scheduler, as_json)
+
+
+def run(spec, log, run_name, history, budget, max_evals, workers, scheduler, as_json) -> None:
+    """Run or continue the calibration in `log`; write the profile as it improves; print the report."""
+    from ..calibrate import calibrate as fit
+    from ..calibrate import curvature, die_report
+    from ..physics import profile_to_toml
+    from .optimize import _simulation_view
+
+    dice = spec.real_dice
+    profile_path = log.folder / f"{run_name}.toml"
+    command = f"diefab calibrate --resume {log.folder}"
+    live, update = _simulation_view(spec, budget * 60, history)
+    records = list(history)
+
+    def summary(best):
+        return {
+            "deviance": best["deviance"],
+            "deviance_per_roll": best["objective"],
+            "drops_per_die": best["drops"],
+            "seed": spec.seed,
+            "dice": [d.name for d in dice],
+            "rolls": [d.n for d in dice],
+        }
+
+    def on_best(record):
+        settings = spec.settings(record["x"])
+        text = profile_to_toml(settings, name=run_name, calibration=summary(record), comment=f"Written by: {command}",
+                               description=f"physics calibrated to {len(dice)} dice with real rolls")  # fmt: skip
+        atomic_write(profile_path, text)
+        if update:
+            update(best=record)
+
+    def on_evaluation(record):
+        log.append(record)
+        records.append(record)
+        if update:
+            update(record=record)
+
+    client = None
+    if scheduler is not None:
+        from ..physics import dask_client
+
+        client, _ = dask_client(scheduler)
+    result = run_logged(
+        lambda: fit(spec, workers=workers, scheduler=client, history=history, on_evaluation=on_evaluation,
+                    on_best=on_best, budget_seconds=budget * 60, max_evaluations=max_evals),
+        log, live, client, f"diefab calibrate --resume {log.folder}",
+    )  # fmt: skip
+    best = result.best
+    if best is None:
+        from ..calibrate import CalibrationError
+
+        raise CalibrationError(f"no candidate could be simulated in {result.evaluations} evaluations")
+    fitted = curvature(records, spec, best)
+    start = next((r for r in records if r.get("kind") == "start" and r.get("feasible")), None)
+    per_die = []
+    for k, die in enumerate(dice):
+        row = die_report(die, best["dice"][k]["counts"])
+        if start is not None:
+            row["start"] = die_report(die, start["dice"][k]["counts"])
+        per_die.append(row)
+    report = {
+        "name": run_name,
+        "fitted": fitted,
+        "deviance": best["deviance"],
+        "deviance_per_roll": best["objective"],
+        "drops_per_die": best["drops"],
+        "start_deviance": None if start is None else start["deviance"],
+        "start_drops_per_die": None if start is None else start["drops"],
+        "dice": per_die,
+        "settings": spec.settings(best["x"]).as_dict(),
+        "evaluations": result.evaluations,
+        "replayed": result.replayed,
+        "drops": result.drops * len(dice),
+        "finished": result.finished,
+        "run_folder": str(log.folder),
+        "profile": str(profile_path),
+    }
+    if as_json:
+        emit_json(report)
+        return
+    print_report(report)
+
+
+def print_report(report) -> None:
+    """The human-readable calibration report."""
+    from rich.table import Table
+
+    con = console()
+    con.print(f"[bold]{report['name']}[/bold]: deviance {report['deviance']:.2f} "
+              f"({report['deviance_per_roll']:.4f} per roll) at {report['drops_per_die']} drops per die"
+              + ("" if report["start_deviance"] is None else
+                 f"; at the start {report['start_deviance']:.2f} ({report['start_drops_per_die']} drops)"))  # fmt: skip
+    table = Table("parameter", "fitted", "standard error")
+    for name, fit in report["fitted"].items():
+        se = "not determined by the counts" if fit["se"] is None else f"{fit['se']:.3g}"
+        table.add_row(name, f"{fit['value']:.4g}", se)
+    con.print(table)
+    dice = Table("die", "rolls", "TVD fitted", "TVD start", "sampling TVD", "G² (df)", "p")
+    for d in report["dice"]:
+        start = d.get("start")
+        dice.add_row(d["name"], str(d["rolls"]), f"{d['tvd']:.4f}", "-" if start is None else f"{start['tvd']:.4f}",
+                     f"{d['noise_tvd']:.4f}", f"{d['deviance']:.2f} ({d['df']})", f"{d['p_value']:.3g}")  # fmt: skip
+    con.print(dice)
+    state = "finished" if report["finished"] else "stopped by the budget or --max-evals (resume to continue)"
+    con.print(f"{report['evaluations']} evaluations ({report['replayed']} replayed), {report['drops']:,} drops; "
+              f"{state}\nlog {report['run_folder']}\nwrote {report['profile']}")  # fmt: skip
