@@ -61,6 +61,8 @@ __all__ = [
     "calibrate",
     "curvature",
     "deviance",
+    "real_die",
+    "realrolls_die",
     "die_report",
     "settings_at",
     "smoothed",
@@ -215,6 +217,35 @@ def real_die(name: str, design: Design, counts: Sequence[int] | str, **kwargs: A
     except StatsError as exc:
         raise CalibrationError(f"die {name!r}: {exc}") from None
     return RealDie(name, design, np.asarray(counts), **kwargs)
+
+
+def realrolls_die(path) -> RealDie:
+    """A :class:`RealDie` from a file of the real-rolls data (:func:`diefab.realrolls.load_real_rolls`).
+
+    Its design is the data's hull with the printed body's centre of mass and
+    inertia; mirror-image outcomes become :attr:`RealDie.groups` and the
+    source's own predictions its :attr:`RealDie.reference`.
+    """
+    from .design import parse_design
+    from .realrolls import load_real_rolls
+
+    rolls = load_real_rolls(path)
+    (text,) = rolls.design_files().values()
+    design = parse_design(text, source=str(path))
+    index = {v: i for i, v in enumerate(design.support)}
+    missing = [o for o in rolls.outcomes if o not in index]
+    if missing or len(index) != len(rolls.outcomes):
+        raise CalibrationError(f"{path}: outcome {missing[0] if missing else '?'} has no face the die rests on")
+    order = [index[o] for o in rolls.outcomes]
+
+    def aligned(values) -> np.ndarray:
+        out = np.zeros(len(index))
+        out[order] = values
+        return out
+
+    groups = tuple(tuple(index[o] for o in g) for g in rolls.groups)
+    reference = {k: aligned(v) for k, v in rolls.reference.items()}
+    return RealDie(rolls.name, design, aligned(rolls.counts).astype(np.int64), groups, reference)
 
 
 # ----------------------------------------------------------------------
