@@ -51,11 +51,7 @@ __all__ = [
     "classify_pose",
     "dask_client",
     "drop",
-    "list_profiles",
-    "load_profile",
     "plot_validation",
-    "profile_to_toml",
-    "read_profile",
     "shutdown_pool",
     "simulate",
 ]
@@ -200,96 +196,6 @@ class PhysicsSettings:
     def as_dict(self) -> dict[str, Any]:
         """The settings as a plain mapping (ranges as lists), e.g. for JSON."""
         return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
-
-
-# ----------------------------------------------------------------------
-# physics profiles: a TOML file of settings
-
-#: Top-level keys of a physics profile.
-PROFILE_KEYS = ("name", "description", "physics", "calibration")
-
-
-def _profiles_dir():
-    from importlib import resources
-
-    return resources.files("diefab").joinpath("data", "profiles")
-
-
-def list_profiles() -> list[str]:
-    """Names of the shipped physics profiles, sorted."""
-    folder = _profiles_dir()
-    if not folder.is_dir():
-        return []
-    return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
-
-
-def read_profile(spec) -> tuple[dict[str, Any], str]:
-    """The parsed TOML of profile `spec` (a shipped profile's name or a file path) and its source.
-
-    Raises
-    ------
-    PhysicsError
-        The file is missing, unreadable, not TOML or not a profile (unknown
-        top-level key, no ``[physics]`` table).
-    """
-    import tomllib
-    from pathlib import Path
-
-    text = str(spec)
-    if text.endswith(".toml") or "/" in text or "\\" in text or Path(text).exists():
-        path, source = Path(text), f"physics profile {text}"
-        if not path.is_file():
-            raise PhysicsError(f"physics profile {text} {'is not a file' if path.exists() else 'does not exist'}")
-    else:
-        path, source = _profiles_dir() / f"{text}.toml", f"physics profile {text!r}"
-        if not path.is_file():
-            known = ", ".join(list_profiles()) or "none"
-            raise PhysicsError(f"unknown physics profile {text!r} (shipped: {known}; or give a path to a .toml file)")
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError) as exc:
-        raise PhysicsError(f"cannot read {source}: {exc}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise PhysicsError(f"{source}: malformed TOML: {exc}") from None
-    unknown = sorted(set(data) - set(PROFILE_KEYS))
-    if unknown:
-        raise PhysicsError(f"{source}: unknown key {unknown[0]!r} (keys: {', '.join(PROFILE_KEYS)})")
-    if not isinstance(data.get("physics"), dict):
-        raise PhysicsError(f"{source}: needs a [physics] table of settings")
-    return data, source
-
-
-def load_profile(spec, base: Mapping[str, Any] | None = None, **overrides: Any) -> PhysicsSettings:
-    """Settings of physics profile `spec` over `base` (e.g. a design's ``[physics]``), then `overrides`.
-
-    `spec` is a shipped profile's name (:func:`list_profiles`) or a TOML file
-    with a ``[physics]`` table (the keys of :class:`PhysicsSettings`); None
-    values in `overrides` are ignored, as in :meth:`PhysicsSettings.from_mapping`.
-    """
-    data, source = read_profile(spec)
-    try:
-        return PhysicsSettings.from_mapping({**dict(base or {}), **data["physics"]}, **overrides)
-    except PhysicsError as exc:
-        raise PhysicsError(f"{source}: {exc}") from None
-    except TypeError as exc:
-        raise PhysicsError(f"{source}: {exc}") from None
-
-
-def profile_to_toml(settings: PhysicsSettings, *, name: str = "", description: str = "",
-                    calibration: Mapping[str, Any] | None = None, comment: str = "") -> str:  # fmt: skip
-    """A physics profile as TOML (round-trips through :func:`load_profile`)."""
-    import tomli_w
-
-    data: dict[str, Any] = {}
-    if name:
-        data["name"] = name
-    if description:
-        data["description"] = description
-    data["physics"] = settings.as_dict()
-    if calibration:
-        data["calibration"] = dict(calibration)
-    header = "".join(f"# {line}\n" for line in comment.splitlines())
-    return header + tomli_w.dumps(data)
 
 
 # ----------------------------------------------------------------------

@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from diefab.errors import PhysicsError
-from diefab.physics import PhysicsSettings, load_profile, profile_to_toml
+from diefab.physics import PhysicsSettings
+from diefab.profiles import load_profile, profile_to_toml
 
 # ----------------------------------------------------------------------
 # physics profiles
@@ -239,3 +240,27 @@ def test_cli_calibrates_writes_a_profile_and_resumes(tmp_path, run):
     assert (again["evaluations"], again["replayed"]) == (5, 3)
     assert len((tmp_path / "calibrated" / "evaluations.jsonl").read_text().splitlines()) == 5
     assert "already holds a run" in run(*args)[2]
+
+
+# ----------------------------------------------------------------------
+# shipped profiles and sensitivity
+
+
+def test_standard_profiles_are_shipped_and_valid():
+    from diefab.profiles import STANDARD, list_profiles
+
+    assert set(STANDARD) <= set(list_profiles())
+    for name in STANDARD:
+        assert isinstance(load_profile(name), PhysicsSettings)
+
+
+def test_sensitivity_drops_each_profile_with_its_settings(run):
+    code, out, err = run("validate", "d6", "--sensitivity", "--sims", "30", "--workers", "1", "--friction", "0.7",
+                         "--json")  # fmt: skip
+    assert code == 0, err
+    report = json.loads(out)
+    rows = {r["profile"]: r for r in report["profiles"]}
+    assert rows["hard-tray"]["settings"]["restitution"] == 0.7 and rows["low-spin"]["settings"]["restitution"] == 0.3
+    assert all(r["settings"]["friction"] == 0.7 for r in rows.values())  # the option overrides every profile
+    assert all(sum(r["counts"]) + r["cocked"] + r["unsettled"] == 30 for r in rows.values())
+    assert report["worst_tvd"] == max(r["tvd"] for r in rows.values())

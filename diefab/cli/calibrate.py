@@ -82,7 +82,8 @@ def calibrate(ctx, die_args, name, free, bounds, seed, sims_per_eval, max_sims_p
     validate and optimize take with --physics.
     """
     from ..calibrate import CalibrationError, CalibrationLog, make_spec
-    from ..physics import PhysicsSettings, load_profile
+    from ..physics import PhysicsSettings
+    from ..profiles import load_profile
     from ..simopt import RunError
 
     for value, hint in ((sims_per_eval, "--sims-per-eval"), (max_evals, "--max-evals"), (workers, "--workers")):
@@ -129,7 +130,7 @@ def run(spec, log, run_name, history, budget, max_evals, workers, scheduler, as_
     """Run or continue the calibration in `log`; write the profile as it improves; print the report."""
     from ..calibrate import calibrate as fit
     from ..calibrate import curvature, die_report
-    from ..physics import profile_to_toml
+    from ..profiles import profile_to_toml
     from .optimize import _simulation_view
 
     dice = spec.real_dice

@@ -162,7 +162,8 @@ def physics_file_option(func):
 
 def physics_settings(design: Design, profile: str | None = None, **overrides):
     """The design's [physics] table, then `profile` (a name or file), then the command-line `overrides`."""
-    from ..physics import PhysicsSettings, load_profile
+    from ..physics import PhysicsSettings
+    from ..profiles import load_profile
 
     if profile is None:
         return PhysicsSettings.from_mapping(design.physics, **overrides)

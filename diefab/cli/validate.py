@@ -34,12 +34,20 @@ from .common import (
     "--fill", type=click.Choice(["solid", "shell", "print"]), default=None, help="Override the design's fill."
 )
 @click.option("--target", default=None, help="Override the design's target distribution.")
+@click.option("--sensitivity", is_flag=True,
+              help="Validate under each standard throw and table (the shipped profiles soft-tray, wooden-table, "
+              "hard-tray, low-spin, high-spin) and report the TVD to the target of each and the worst.")  # fmt: skip
 @physics_file_option
 @physics_options
 @json_option
-def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, target, physics_profile, as_json,
-             **physics) -> None:  # fmt: skip
-    """Drop DESIGN many times in pybullet and test the counts against its target."""
+def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, target, sensitivity, physics_profile,
+             as_json, **physics) -> None:  # fmt: skip
+    """Drop DESIGN many times in pybullet and test the counts against its target.
+
+    With --sensitivity, drop it under each standard throw and table instead
+    (each over --physics and the design's [physics] table; the physics
+    options override all of them).
+    """
     import os
     from dataclasses import replace
 
@@ -53,6 +61,10 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, ta
     if fill:
         d = replace(d, fill=replace(d.fill, kind=fill))
     settings = physics_settings(d, physics_profile, **physics)
+    if sensitivity:
+        if plot_file is not None:
+            raise click.BadParameter("--plot draws one validation, not --sensitivity", param_hint="--plot")
+        return _sensitivity(d, settings, sims, seed, workers, scheduler, as_json, physics)
     if plot_file is not None:
         if plot_file.suffix.lower() not in (".png", ".svg"):
             raise click.BadParameter(f"{plot_file} must end in .png or .svg", param_hint="--plot")
@@ -136,3 +148,34 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, ta
               f"JSD = {fit.jsd:.5f} (expected {fit.expected_jsd:.5f})")  # fmt: skip
     if plot_file is not None:
         con.print(f"wrote {plot_file}")
+
+
+def _sensitivity(d, base, sims, seed, workers, scheduler, as_json, overrides) -> None:
+    """``validate --sensitivity``: the TVD to the target under each standard profile."""
+    from dataclasses import replace
+
+    from ..physics import SimulationInterrupted
+    from ..profiles import STANDARD, sensitivity
+
+    try:
+        rows = sensitivity(replace(d, physics=base.as_dict()), STANDARD, sims, seed=seed, workers=workers,
+                           scheduler=scheduler, **overrides)  # fmt: skip
+    except SimulationInterrupted as exc:
+        click.echo(f"diefab: interrupted after {exc.done} of {exc.total} drops of one profile", err=True)
+        raise click.exceptions.Exit(130) from None
+    worst = max(rows, key=lambda r: r["tvd"])
+    out = {"design": d.name, "params": dict(d.params), "fill": d.fill.kind, "target": d.target, "n": sims,
+           "seed": seed, "profiles": rows, "worst_profile": worst["profile"], "worst_tvd": worst["tvd"]}  # fmt: skip
+    if as_json:
+        emit_json(out)
+        return
+    from rich.table import Table
+
+    con = console()
+    con.print(heading(d, fill=d.fill.kind, target=d.target))
+    table = Table("profile", "TVD to target", "expected (noise)", "chi2 p", "cocked", "unsettled", "seconds")
+    for r in rows:
+        table.add_row(r["profile"], f"{r['tvd']:.4f}", f"{r['expected_tvd']:.4f}", f"{r['p_value']:.3g}",
+                      str(r["cocked"]), str(r["unsettled"]), f"{r['seconds']:.1f}")  # fmt: skip
+    con.print(table)
+    con.print(f"worst: {worst['profile']}, TVD {worst['tvd']:.4f} ({sims} drops per profile, seed {seed})")
