@@ -264,3 +264,21 @@ def test_sensitivity_drops_each_profile_with_its_settings(run):
     assert all(r["settings"]["friction"] == 0.7 for r in rows.values())  # the option overrides every profile
     assert all(sum(r["counts"]) + r["cocked"] + r["unsettled"] == 30 for r in rows.values())
     assert report["worst_tvd"] == max(r["tvd"] for r in rows.values())
+
+
+def test_robust_objective_is_the_worst_throw_and_resumes(tmp_path):
+    from diefab.design import design_to_toml, load_design
+    from diefab.simopt import RunSpec, SimulationObjective, start_point
+
+    d = load_design("fudge-gem")
+    names = ("a", "b", "c", "d")
+    throws = tuple(load_profile(p).as_dict() for p in ("soft-tray", "hard-tray"))
+    spec = RunSpec(design_toml=design_to_toml(d), names=names, x0=tuple(start_point(d, names, model="design")),
+                   sims_per_eval=20, max_sims=40, physics=PhysicsSettings().as_dict(), robust=throws)  # fmt: skip
+    assert RunSpec.from_json(spec.to_json()) == spec
+    record = SimulationObjective(spec, workers=1)(np.array(spec.x0), 20)
+    assert len(record["objectives"]) == 2 and record["objective"] == max(record["objectives"])
+
+
+def test_cli_robust_needs_simulation(bad):
+    assert "--model simulation" in bad("optimize", "fudge-gem", "--robust")

@@ -52,12 +52,15 @@ from .common import (
 @click.option("--objective", type=click.Choice(["eq2", "tvd", "jsd"]), default="eq2", show_default=True)
 @click.option("--name", default=None, help="Name of the optimized design (default DESIGN-MODEL-opt).")
 @simulation_options
+@click.option("--robust", is_flag=True,
+              help="[simulation] Minimize the worst objective over the standard throws and tables (the shipped "
+              "profiles soft-tray, wooden-table, hard-tray, low-spin, high-spin; each over --physics).")  # fmt: skip
 @physics_file_option
 @out_option
 @json_option
 @click.pass_context
-def optimize(ctx, design, params, model, target, seed, min_margin, starts, free, objective, name, physics_profile,
-             out_dir, as_json, **sim) -> None:  # fmt: skip
+def optimize(ctx, design, params, model, target, seed, min_margin, starts, free, objective, name, robust,
+             physics_profile, out_dir, as_json, **sim) -> None:  # fmt: skip
     """Fit DESIGN's parameters to its target; write the result as a template TOML.
 
     With --model simulation the objective uses pybullet drop frequencies
@@ -69,7 +72,10 @@ def optimize(ctx, design, params, model, target, seed, min_margin, starts, free,
 
     if model == "simulation":
         return optimize_simulation(ctx, design, params, target, seed, min_margin, starts, free, objective, name,
-                                   physics_profile, out_dir, as_json, **sim)  # fmt: skip
+                                   robust, physics_profile, out_dir, as_json, **sim)  # fmt: skip
+    if robust:
+        raise click.BadParameter("--robust needs --model simulation (the other models do not simulate)",
+                                 param_hint="--robust")  # fmt: skip
     d = get_design(design, params, target)
     if physics_profile is not None:
         physics_settings(d, physics_profile)  # a bad profile is an error whatever the model
@@ -175,7 +181,7 @@ def _simulation_view(spec, budget_s: float, history):
     return live, update
 
 
-def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, free, objective, name,
+def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, free, objective, name, robust,
                         physics_profile, out_dir, as_json, sims_per_eval, max_sims_per_eval, budget, resume, method,
                         start_model, sigma, max_evals, workers, scheduler) -> None:  # fmt: skip
     """``diefab optimize DESIGN --model simulation``: see :mod:`diefab.simopt`."""
@@ -217,6 +223,8 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
                                f"(stored in {log.spec_path})")  # fmt: skip
         if physics_profile is not None and physics_settings(d, physics_profile).as_dict() != spec.physics:
             raise RunError(f"--physics {physics_profile} differs from the run's physics (stored in {log.spec_path})")
+        if ctx.get_parameter_source("robust").name == "COMMANDLINE" and robust != bool(spec.robust):
+            raise RunError(f"--robust differs from the run's settings (stored in {log.spec_path})")
         history, warning = log.read()
         run_name = Path(resume).name
     else:
@@ -226,13 +234,18 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         if log.path.exists():
             raise RunError(f"{log.folder} already holds a run: resume it with --resume {log.folder} or pick --name")
         physics = physics_settings(d, physics_profile)
+        throws = ()
+        if robust:
+            from ..profiles import STANDARD, load_profile
+
+            throws = tuple(load_profile(p, base=physics.as_dict()).as_dict() for p in STANDARD)
         x0 = start_point(d, names, model=start_model, objective=objective, min_margin=min_margin, starts=starts,
                          seed=seed)  # fmt: skip
         spec = RunSpec(
             design_toml=design_to_toml(d), names=tuple(names), x0=tuple(float(v) for v in x0), objective=objective,
             min_margin=float(min_margin), seed=seed, sims_per_eval=sims_per_eval,
             max_sims=max_sims_per_eval or 16 * sims_per_eval, method=method, sigma0=sigma,
-            physics=physics.as_dict(), start=start_model,
+            physics=physics.as_dict(), start=start_model, robust=throws,
         )  # fmt: skip
         log.create(spec)
         history = []
@@ -282,8 +295,10 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         "min_margin": best["min_margin"],
         "evaluations": result.evaluations,
         "replayed": result.replayed,
-        "drops": result.drops,
+        "drops": result.drops * max(len(spec.robust), 1),
         "finished": result.finished,
+        "robust": bool(spec.robust),
+        "objectives": best.get("objectives"),
         "run_folder": str(log.folder),
         "design_file": str(best_path),
         "elapsed_seconds": last["elapsed"],
@@ -296,7 +311,12 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         f"[bold]{run_name}[/bold]  "
         + " ".join(f"{k}={v:.4f}" for k, v in best["params"].items())
         + f"\n{spec.objective} = {best['objective']:.5f} at {best['drops']} drops (seed {spec.seed}); "
-        f"{result.evaluations} evaluations ({result.replayed} replayed), {result.drops:,} drops; "
+        f"{result.evaluations} evaluations ({result.replayed} replayed), {report['drops']:,} drops; "
         f"min margin {best['min_margin']:.4f}"
     )
+    if spec.robust and best.get("objectives"):
+        from ..profiles import STANDARD
+
+        con.print(f"worst over {len(spec.robust)} throws and tables; each: "
+                  + "  ".join(f"{n} {o:.5f}" for n, o in zip(STANDARD, best["objectives"])))  # fmt: skip
     con.print(f"log {log.path}\nwrote {best_path}")
