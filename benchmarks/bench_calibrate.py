@@ -64,12 +64,64 @@ kind = "shell"
 
 def load_dice(folder: Path) -> list[RealDie]:
     dice = [RealDie("paper-gem", parse_design(PAPER_DIE, source="paper die"), TABLE_2)]
+    try:
+        import diefab.realrolls  # noqa: F401
+    except ImportError:
+        reader = convex_die
+        print("diefab.realrolls is missing: reading the convex dice of the data as plain hulls (figurines skipped)")
+    else:
+        reader = realrolls_die
     for path in sorted(folder.glob("*.json")):
         try:
-            dice.append(realrolls_die(path))
+            dice.append(reader(path))
         except (DiefabError, ImportError) as exc:
             print(f"skipped {path.name}: {exc}")
     return dice
+
+
+def convex_die(path: Path) -> RealDie:
+    """A convex die of the real-rolls data as a hull with a uniform solid body (no stated centre of mass).
+
+    A stand-in for :func:`diefab.calibrate.realrolls_die` on a diefab without
+    the real-rolls reader: each resting face of the hull takes the outcome of
+    the data's triangle in its plane; the other faces are transitional.
+    """
+    from diefab.design import Design
+    from diefab.geometry import Polyhedron, resting_faces
+    from diefab.mass import Fill, mass_properties
+
+    data = json.loads(path.read_text())
+    if "mesh_vertices" in data["geometry"]:
+        raise DiefabError("a non-convex figurine needs the stated centre of mass of diefab.realrolls")
+    v = np.array(data["geometry"]["hull_vertices"], dtype=float)
+    scale = 2.0 / float(np.ptp(v, axis=0).max())
+    poly = Polyhedron.from_points(v * scale)
+    tri = np.array(data["geometry"]["hull_faces"])
+    outcome_of = {t: int(o) for o, faces in data["outcome_faces"].items() for t in faces}
+    tv = v[tri] * scale
+    normals = np.cross(tv[:, 1] - tv[:, 0], tv[:, 2] - tv[:, 0])
+    normals /= np.linalg.norm(normals, axis=1)[:, None]
+    rest = resting_faces(poly, mass_properties(poly, Fill()).center)
+    values = {}
+    for f in np.flatnonzero(rest):
+        near = np.abs(tv.mean(axis=1) @ poly.normals[f] - poly.offsets[f]) < 1e-6
+        t = int(np.argmax(np.where(near, normals @ poly.normals[f], -2)))
+        values[poly.names[f]] = outcome_of[t]
+    outcomes = [int(o) for o in data["physical"]["outcomes"]]
+    design = Design(path.stem, "convex", vertices=tuple(map(tuple, (v * scale).tolist())), values=values,
+                    transitional=tuple(n for k, n in enumerate(poly.names) if not rest[k]),
+                    target=",".join(f"{o}:1" for o in outcomes), size_mm=float(np.ptp(v, axis=0).max()))  # fmt: skip
+    index = {o: i for i, o in enumerate(design.support)}
+    order = [index[o] for o in outcomes]
+    counts = np.zeros(len(index), dtype=np.int64)
+    counts[order] = data["physical"]["counts"]
+    ref = {}
+    for k in ("ours", "bullet"):
+        r = np.zeros(len(index))
+        r[order] = data["their_model_and_sims"][k]
+        ref[k] = r
+    groups = tuple(tuple(index[int(o)] for o in g) for g in data.get("ambiguous_groups", []))
+    return RealDie(path.stem, design, counts, groups, ref)
 
 
 def grouped_tvd(die: RealDie, p: np.ndarray) -> float:
