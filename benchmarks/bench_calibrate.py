@@ -124,6 +124,15 @@ def convex_die(path: Path) -> RealDie:
     return RealDie(path.stem, design, counts, groups, ref)
 
 
+def fingerprint(die: RealDie) -> str:
+    """A short hash of the die's design: a cached simulation is reused only for the same die."""
+    import hashlib
+
+    from diefab.design import design_to_toml
+
+    return hashlib.sha256(design_to_toml(die.design).encode()).hexdigest()[:16]
+
+
 def grouped_tvd(die: RealDie, p: np.ndarray) -> float:
     """TVD of `p` to the die's real frequencies, the least over relabellings within its groups."""
     from itertools import permutations, product
@@ -181,7 +190,7 @@ def main() -> int:
         for line in args.cache.read_text().splitlines():
             try:
                 r = json.loads(line)
-                cache[(r["die"], tuple(np.round(r["x"], 9)), r["drops"], r["seed"])] = r["counts"]
+                cache[(r["die"], r["design"], tuple(np.round(r["x"], 9)), r["drops"], r["seed"])] = r["counts"]
             except (ValueError, KeyError):
                 continue
     args.cache.parent.mkdir(parents=True, exist_ok=True)
@@ -190,12 +199,12 @@ def main() -> int:
     with args.cache.open("a") as log:
         for j, (x, settings) in enumerate(zip(xs, cands)):
             for i, die in enumerate(dice):
-                key = (die.name, tuple(np.round(x, 9)), args.drops, args.seed)
+                key = (die.name, fingerprint(die), tuple(np.round(x, 9)), args.drops, args.seed)
                 if key not in cache:
                     r = simulate_die(die, settings, args.drops, args.seed, args.workers)
                     cache[key] = r["counts"]
                     simulated += args.drops
-                    log.write(json.dumps({"die": die.name, "x": list(key[1]), "drops": args.drops,
+                    log.write(json.dumps({"die": die.name, "design": key[1], "x": list(key[2]), "drops": args.drops,
                                           "seed": args.seed, "counts": r["counts"]}) + "\n")  # fmt: skip
                     log.flush()
                 counts[i, j] = np.array(cache[key])

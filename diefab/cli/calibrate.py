@@ -135,9 +135,10 @@ def run(spec, log, run_name, history, budget, max_evals, workers, scheduler, as_
 
     dice = spec.real_dice
     profile_path = log.folder / f"{run_name}.toml"
-    command = f"diefab calibrate --resume {log.folder}"
+    command = f"diefab calibrate (run {log.folder}; continue it with --resume)"
     live, update = _simulation_view(spec, budget * 60, history)
     records = list(history)
+    names = ", ".join(d.name for d in dice)
 
     def summary(best):
         return {
@@ -152,7 +153,7 @@ def run(spec, log, run_name, history, budget, max_evals, workers, scheduler, as_
     def on_best(record):
         settings = spec.settings(record["x"])
         text = profile_to_toml(settings, name=run_name, calibration=summary(record), comment=f"Written by: {command}",
-                               description=f"physics calibrated to {len(dice)} dice with real rolls")  # fmt: skip
+                               description=f"physics calibrated to the real rolls of {names}")  # fmt: skip
         atomic_write(profile_path, text)
         if update:
             update(best=record)
