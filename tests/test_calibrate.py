@@ -240,6 +240,8 @@ def test_cli_calibrates_writes_a_profile_and_resumes(tmp_path, run):
     assert (again["evaluations"], again["replayed"]) == (5, 3)
     assert len((tmp_path / "calibrated" / "evaluations.jsonl").read_text().splitlines()) == 5
     assert "already holds a run" in run(*args)[2]
+    code, _, err = run("calibrate", "--resume", tmp_path / "calibrated", "--free", "spin")
+    assert code == 2 and "leave out --free" in err
 
 
 # ----------------------------------------------------------------------

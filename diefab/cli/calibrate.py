@@ -104,8 +104,11 @@ def calibrate(ctx, die_args, name, free, bounds, seed, sims_per_eval, max_sims_p
             if source is not None and source.name == "COMMANDLINE" and value != getattr(spec, key):
                 raise RunError(f"--{key.replace('_', '-')} {value} differs from the run's {getattr(spec, key)} "
                                f"(stored in {log.spec_path})")  # fmt: skip
-        if die_args:
-            raise RunError(f"a resumed run uses the dice stored in {log.spec_path}: leave out --die")
+        for key, flag in (("die_args", "--die"), ("free", "--free"), ("bounds", "--bound"),
+                          ("physics_profile", "--physics")):  # fmt: skip
+            source = ctx.get_parameter_source(key)
+            if source is not None and source.name == "COMMANDLINE":
+                raise RunError(f"a resumed run keeps the dice and settings stored in {log.spec_path}: leave out {flag}")
         history, warning = log.read()
         run_name = Path(resume).name
     else:
@@ -178,6 +181,8 @@ def run(spec, log, run_name, history, budget, max_evals, workers, scheduler, as_
     if best is None:
         from ..calibrate import CalibrationError
 
+        if result.evaluations == 0:
+            raise CalibrationError(f"the budget ran out before the first evaluation (--resume {log.folder})")
         raise CalibrationError(f"no candidate could be simulated in {result.evaluations} evaluations")
     fitted = curvature(records, spec, best)
     start = next((r for r in records if r.get("kind") == "start" and r.get("feasible")), None)
