@@ -227,8 +227,12 @@ def realrolls_die(path) -> RealDie:
     source's own predictions its :attr:`RealDie.reference`.
     """
     from .design import parse_design
-    from .realrolls import load_real_rolls
 
+    try:
+        from .realrolls import load_real_rolls
+    except ImportError:
+        raise CalibrationError(f"{path}: reading the real-rolls format needs diefab.realrolls, which this "
+                               "installation lacks") from None  # fmt: skip
     rolls = load_real_rolls(path)
     (text,) = rolls.design_files().values()
     design = parse_design(text, source=str(path))

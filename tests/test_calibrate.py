@@ -284,3 +284,20 @@ def test_robust_objective_is_the_worst_throw_and_resumes(tmp_path):
 
 def test_cli_robust_needs_simulation(bad):
     assert "--model simulation" in bad("optimize", "fudge-gem", "--robust")
+
+
+REALROLLS = "/work/shared/realrolls/binom3.json"
+
+
+def test_realrolls_die_keeps_counts_groups_and_references():
+    from pathlib import Path
+
+    pytest.importorskip("diefab.realrolls")
+    if not Path(REALROLLS).is_file():
+        pytest.skip("the real-rolls data are not on this machine")
+    from diefab.calibrate import realrolls_die
+
+    data = json.loads(Path(REALROLLS).read_text())
+    die = realrolls_die(REALROLLS)
+    assert die.n == data["physical"]["n"] and sorted(die.counts.tolist()) == sorted(data["physical"]["counts"])
+    assert len(die.groups) == len(data["ambiguous_groups"]) and {"ours", "bullet"} <= set(die.reference)

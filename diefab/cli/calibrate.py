@@ -26,13 +26,14 @@ def _parse_bounds(items: tuple[str, ...]) -> dict[str, tuple[float, float]]:
     return out
 
 
-def _dice(die_args):
-    from ..calibrate import real_die
+def _dice(die_args, realrolls):
+    from ..calibrate import real_die, realrolls_die
 
     dice = []
     for spec, counts in die_args:
         d = get_design(spec)
         dice.append(real_die(d.name, d, counts))
+    dice += [realrolls_die(path) for path in realrolls]
     names: dict[str, int] = {}
     out = []
     for die in dice:
@@ -49,6 +50,9 @@ def _dice(die_args):
 @click.option("--die", "die_args", type=(str, str), multiple=True, metavar="DESIGN COUNTS",
               help="A die with real rolls: a design (template or TOML) and its counts per value, increasing "
               "(\"0,20,48,...\") or a roll log file (repeatable).")  # fmt: skip
+@click.option("--realrolls", type=click.Path(exists=True, dir_okay=False, path_type=Path), multiple=True,
+              metavar="FILE",
+              help="A die of the real-rolls JSON format: geometry, mass and counts (repeatable).")  # fmt: skip
 @click.option("--name", default="calibrated", show_default=True, help="Name of the run and of the profile.")
 @click.option("--free", default=",".join(("restitution", "friction", "spin", "drop_height")), show_default=True,
               metavar="A,B,...", help="Physics parameters to fit: restitution, friction, rolling_friction, "
@@ -71,7 +75,7 @@ def _dice(die_args):
 @out_option
 @json_option
 @click.pass_context
-def calibrate(ctx, die_args, name, free, bounds, seed, sims_per_eval, max_sims_per_eval, budget, resume,
+def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval, max_sims_per_eval, budget, resume,
               method, sigma, max_evals, workers, scheduler, physics_profile, out_dir, as_json) -> None:  # fmt: skip
     """Fit the physics settings to dice with real rolls and write a physics profile.
 
@@ -104,17 +108,17 @@ def calibrate(ctx, die_args, name, free, bounds, seed, sims_per_eval, max_sims_p
             if source is not None and source.name == "COMMANDLINE" and value != getattr(spec, key):
                 raise RunError(f"--{key.replace('_', '-')} {value} differs from the run's {getattr(spec, key)} "
                                f"(stored in {log.spec_path})")  # fmt: skip
-        for key, flag in (("die_args", "--die"), ("free", "--free"), ("bounds", "--bound"),
-                          ("physics_profile", "--physics")):  # fmt: skip
+        for key, flag in (("die_args", "--die"), ("realrolls", "--realrolls"), ("free", "--free"),
+                          ("bounds", "--bound"), ("physics_profile", "--physics")):  # fmt: skip
             source = ctx.get_parameter_source(key)
             if source is not None and source.name == "COMMANDLINE":
                 raise RunError(f"a resumed run keeps the dice and settings stored in {log.spec_path}: leave out {flag}")
         history, warning = log.read()
         run_name = Path(resume).name
     else:
-        if not die_args:
-            raise CalibrationError("give at least one die with real rolls: --die DESIGN COUNTS")
-        dice = _dice(die_args)
+        if not die_args and not realrolls:
+            raise CalibrationError("give at least one die with real rolls: --die DESIGN COUNTS or --realrolls FILE")
+        dice = _dice(die_args, realrolls)
         names = [n.strip() for n in free.split(",") if n.strip()]
         base = load_profile(physics_profile) if physics_profile else PhysicsSettings()
         spec = make_spec(dice, free=names, base=base, bounds=_parse_bounds(bounds), seed=seed,
