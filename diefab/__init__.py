@@ -21,6 +21,7 @@ from .geometry import Polyhedron, face_margins, solid_angles, up_faces
 from .mass import Fill, MassProperties, mass_properties
 from .models import MODELS, face_probabilities, value_probabilities
 from .physics import PhysicsSettings, RollResult, simulate
+from .profiles import load_profile
 from .stats import GoodnessOfFit, goodness_of_fit, jsd, pearson_divergence, tvd
 from .targets import Target, parse_target
 
@@ -56,6 +57,7 @@ __all__ = [
     "jsd",
     "list_templates",
     "load_design",
+    "load_profile",
     "mass_properties",
     "parse_design",
     "parse_target",
