@@ -16,6 +16,7 @@ from diefab.fabricate.net import design_net, render_net
 from diefab.fabricate.unfold import PAGES, parse_page, unfold
 
 SVG = "{http://www.w3.org/2000/svg}"
+INK = "{http://www.inkscape.org/namespaces/inkscape}"
 OVERLAP_MM2 = 1e-6
 
 
@@ -64,8 +65,15 @@ def test_svg_is_true_scale_mm(made):
     w, h = root.get("width"), root.get("height")
     assert w.endswith("mm") and h.endswith("mm")
     assert root.get("viewBox").split() == ["0", "0", w[:-2], h[:-2]]
-    for group in ("cut", "fold", "tabs", "labels"):
-        assert root.find(f".//{SVG}g[@id='{group}']") is not None
+    for group in ("faces", "tabs", "labels", "info"):
+        assert root.find(f".//{SVG}g[@id='print']//{SVG}g[@id='{group}']") is not None
+    layers = {g.get(f"{INK}label"): g for g in root.iter(f"{SVG}g") if g.get(f"{INK}groupmode") == "layer"}
+    assert sorted(layers) == ["cut", "print", "score"]
+    # cut and score differ in colour as well as dash; nothing but the outlines is on the cut layer
+    assert layers["cut"].get("stroke") != layers["score"].get("stroke")
+    assert layers["score"].get("stroke-dasharray") and not layers["cut"].get("stroke-dasharray")
+    assert {el.tag for el in layers["cut"]} == {f"{SVG}path"}
+    assert not root.findall(f".//{SVG}text")  # text is outlines: no font needed
 
 
 def test_edge_lengths_and_area_survive_unfolding(made):
@@ -113,7 +121,7 @@ def test_one_tab_per_cut_edge_and_folds_per_piece(made):
         folds = [e for e in net.fold_edges if set(poly.edge_faces[e].tolist()) <= members]
         assert len(folds) == len(members) - 1
     # every tab's letter is also printed on the face across its edge
-    labels = [t.text for t in root.find(f".//{SVG}g[@id='labels']").iter(f"{SVG}text")]
+    labels = [t.get("data-text") for t in root.find(f".//{SVG}g[@id='labels']").iter(f"{SVG}path")]
     for t in net.tabs:
         assert labels.count(t.label) >= 2
 
@@ -130,7 +138,8 @@ def test_tabs_are_narrow_trapezoids(made):
 
 def test_face_texts_are_the_design_labels(made):
     design, net, root = made
-    texts = [t.text for t in root.find(f".//{SVG}g[@id='labels']").iter(f"{SVG}text") if t.get("class") == "face"]
+    paths = root.find(f".//{SVG}g[@id='labels']").iter(f"{SVG}path")
+    texts = [t.get("data-text") for t in paths if t.get("class") == "face"]
     assert sorted(texts) == sorted(design.label_of.values())
 
 
