@@ -172,7 +172,7 @@ def reading_note(design: Design) -> str:
     poly = design.polyhedron
     extra = []
     for rest, up in design.label_face.items():
-        if up is not None:
+        if up is not None or rest not in design.value_of:  # a transitional face: the die never rests on it
             continue
         k = poly.face_index(rest)
         heights = poly.vertices @ -poly.normals[k]
