@@ -365,6 +365,12 @@ def parse_design(content: str, *, source: str = "<string>", base: Path | None = 
         kwargs["faces"] = tuple(tuple(f) for f in data["faces"])
     if "mesh" in data:
         kwargs["mesh"] = (base or Path.cwd()) / data["mesh"]
+    if isinstance(data.get("labels"), dict) and base is not None:
+        # an SVG symbol's file is found beside the design file, as a mesh is
+        kwargs["labels"] = {
+            face: f"svg:{base / text[4:].strip()}" if isinstance(text, str) and text.startswith("svg:") else text
+            for face, text in data["labels"].items()
+        }
     if "transitional" in data:
         if not isinstance(data["transitional"], list):
             raise DesignError(f"{source}: transitional must be a list of face names")

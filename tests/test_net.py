@@ -7,6 +7,7 @@ import shutil
 import subprocess
 import xml.etree.ElementTree as ET
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,6 +17,7 @@ from diefab.fabricate.net import design_net, render_net
 from diefab.fabricate.unfold import PAGES, parse_page, unfold
 
 SVG = "{http://www.w3.org/2000/svg}"
+DESIGN_DIR = Path(__file__).resolve().parent.parent / "templates"
 INK = "{http://www.inkscape.org/namespaces/inkscape}"
 OVERLAP_MM2 = 1e-6
 
@@ -440,3 +442,43 @@ def test_cli_copies_pages_and_reading(tmp_path, run):
     assert "2 dice" in out and "a point up means 0" in out
     code, out, err = run("net", "d6", "--out", tmp_path, "--format", "svg", "--size", "6", "--tab-width", "0")
     assert code == 0 and "no glue tabs" in out and "under about 8 mm" in err
+
+
+def test_svg_symbol_on_a_face(tmp_path):
+    """A symbol from an SVG file: holes kept, y flipped, found beside the design file, same place on paper and die."""
+    pytest.importorskip("svgelements")
+    from shapely.geometry import Polygon
+
+    from diefab.fabricate.labels import symbol_shape
+
+    (tmp_path / "ring.svg").write_text(
+        '<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">'
+        '<path d="M10,10 H90 V90 H10 Z M30,30 V70 H70 V30 Z"/><rect x="0" y="92" width="8" height="8"/></svg>'
+    )
+    shape = symbol_shape(str(tmp_path / "ring.svg"))
+    assert shape.bounds[3] - shape.bounds[1] == pytest.approx(1.0)
+    assert len(getattr(shape, "geoms", [shape])) == 2
+    square = max(getattr(shape, "geoms", [shape]), key=lambda g: g.area)
+    assert len(square.interiors) == 1
+    # the small rect sits at the bottom left in the file (SVG y down): bottom left here too (y up)
+    small = min(getattr(shape, "geoms", [shape]), key=lambda g: g.area)
+    assert small.centroid.x < 0 and small.centroid.y < 0
+    text = (tmp_path / "d6.toml").write_text((DESIGN_DIR / "d6.toml").read_text() + '\n[labels]\nf2 = "svg:ring.svg"\n')
+    assert text
+    design = load_design(tmp_path / "d6.toml")
+    net = design_net(design)
+    (sheet,) = sheets_of(design, net)
+    (symbol,) = [t for t in sheet.texts if t.kind == "face" and t.text.startswith("svg:")]
+    assert Polygon(net.faces[design.polyhedron.face_index(symbol.face)]).contains(symbol.shape)
+    for bad in ("svg:missing.svg", "pips:12", "pips:x"):
+        with pytest.raises(ValueError):
+            design_net_labels = replace(design, labels={"f2": bad})
+            render_net(design_net_labels, net, ("svg",))
+
+
+def test_pips_on_the_net():
+    design = load_design("d6")
+    net = design_net(design)
+    (sheet,) = sheets_of(design, net, pips=True)
+    for t in [t for t in sheet.texts if t.kind == "face"]:
+        assert len(getattr(t.shape, "geoms", [t.shape])) == int(t.text)

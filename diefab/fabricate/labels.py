@@ -9,8 +9,9 @@
   carried flat with the face, so paper and plastic dice read alike.
 * **What**: the label text (real font outlines, :mod:`.text`), a mark under
   or after a label that reads as another label of the same die upside down,
-  or pips (``pips:N`` in a design's ``[labels]`` table, or every value
-  label from 1 to 9 with ``--pips``).
+  pips (``pips:N`` in a design's ``[labels]`` table, or every value label
+  from 1 to 9 with ``--pips``) or a symbol drawn in an SVG file
+  (``svg:FILE``, the filled shapes of the file, read with svgelements).
 * **How large**: the largest that fits inside the face region, centred on the
   middle of the largest inscribed circle's track; :func:`fit_label` returns
   the height and centre, and the callers give all value labels the smallest
@@ -35,7 +36,7 @@ import numpy as np
 
 from ..design import Design, format_value
 from ..errors import FabricationError
-from .text import Font, ambiguous, text_polygons
+from .text import CURVE_STEPS, Font, ambiguous, nest_rings, text_polygons
 
 __all__ = [
     "AXIS_PROJECTION",
@@ -44,6 +45,7 @@ __all__ = [
     "fit_label",
     "label_shape",
     "pip_shape",
+    "symbol_shape",
     "reading_note",
     "small_die_warning",
 ]
@@ -107,13 +109,17 @@ def label_shape(text: str, font: Font, *, others=(), mark: str = "bar", pips: bo
     Parameters
     ----------
     text : str
-        ``pips:N`` draws N pips; other text is set in `font`.
+        ``pips:N`` draws N pips, ``svg:FILE`` the symbol in an SVG file
+        (path absolute or relative to the working directory); other text is
+        set in `font`.
     others : iterable of str
         The die's other labels: a label that reads as one of them upside down
         gets `mark` ("bar", "period" or "none").
     pips : bool
         Draw a label that is a whole number from 1 to 9 as pips.
     """
+    if text.startswith("svg:"):
+        return symbol_shape(text[4:].strip())
     if text.startswith("pips:"):
         count = text[5:].strip()
         if not count.isdigit():
@@ -122,6 +128,58 @@ def label_shape(text: str, font: Font, *, others=(), mark: str = "bar", pips: bo
     if pips and text.isdigit() and 1 <= int(text) <= MAX_PIPS:
         return pip_shape(int(text))
     return text_polygons(text, font, mark if ambiguous(text, others) else "none")
+
+
+def symbol_shape(path: str):
+    """The filled shapes of an SVG file as one outline, 1 high, centred on the origin (y up).
+
+    Every path and basic shape (rect, circle, polygon, ...) is read with its
+    transforms applied; subpaths nest even-odd, so a ring drawn inside
+    another is a hole.  Strokes are ignored: draw the symbol filled.
+
+    Raises
+    ------
+    FabricationError
+        If svgelements is missing, the file cannot be read or holds no shape.
+    """
+    from pathlib import Path as FilePath
+
+    from shapely import affinity
+
+    try:
+        from svgelements import SVG, Line, Move, Path, Shape
+    except ImportError:
+        raise FabricationError(
+            f"svg:{path}: reading SVG symbols needs svgelements (pip install 'diefab[svg]')"
+        ) from None
+    file = FilePath(path)
+    if not file.is_file():
+        raise FabricationError(f"svg:{path}: the file does not exist")
+    try:
+        document = SVG.parse(str(file))
+    except Exception as exc:  # svgelements reports malformed files with many exception types
+        raise FabricationError(f"svg:{path}: cannot be read as SVG: {exc}") from exc
+    rings = []
+    t = np.linspace(0, 1, CURVE_STEPS + 1)[1:]
+    for element in document.elements():
+        if not isinstance(element, Shape):
+            continue
+        for sub in Path(element).as_subpaths():
+            points = []
+            for seg in sub:
+                if isinstance(seg, (Move, Line)) or seg.start is None:
+                    if seg.end is not None:
+                        points.append((seg.end.x, seg.end.y))
+                else:
+                    points.extend(np.asarray(seg.npoint(t)).tolist())
+            if len(points) >= 3:
+                rings.append(np.array(points, dtype=float) * [1, -1])  # SVG y points down
+    shape = nest_rings(rings) if rings else None
+    if shape is None or shape.is_empty or shape.area <= 0:
+        raise FabricationError(f"svg:{path}: the file holds no filled shape")
+    x0, y0, x1, y1 = shape.bounds
+    s = 1 / (y1 - y0)
+    return affinity.scale(affinity.translate(shape, -(x0 + x1) / 2, -(y0 + y1) / 2), s, s, origin=(0, 0))
 
 
 def fit_label(region, shape, max_height: float = math.inf) -> tuple[float, float, float]:

@@ -44,10 +44,11 @@ __all__ = [
     "Font",
     "ambiguous",
     "load_font",
+    "needs_underline",
+    "nest_rings",
+    "stroke_width",
     "text_advance",
     "text_outline",
-    "needs_underline",
-    "stroke_width",
     "text_polygons",
     "thin_fraction",
 ]
@@ -160,6 +161,11 @@ def _flatten(path) -> list[np.ndarray]:
     if len(current) >= 3:
         rings.append(np.array(current))
     return rings
+
+
+def nest_rings(rings: list[np.ndarray]):
+    """Closed rings (each (k, 2)) nested even-odd into one shapely geometry, whatever their orientation."""
+    return _nest(rings)
 
 
 def _nest(rings: list[np.ndarray]):
