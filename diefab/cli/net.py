@@ -65,7 +65,7 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
     from ..fabricate.unfold import pack_copies
 
     n_pages = max(n.n_pages for n in pack_copies(the_net, copies))
-    pieces = f"{the_net.n_pieces} piece{'s' * (the_net.n_pieces > 1)}"
+    pieces = f"{the_net.n_pieces} piece{'s' * (the_net.n_pieces > 1)}{' each' * (copies > 1)}"
     tabs = f"{len(the_net.tabs)} glue tabs" if the_net.tabs else "no glue tabs"
     dice = f"{copies} dice, " if copies > 1 else ""
     click.echo(

@@ -201,7 +201,7 @@ def fit_label(region, shape, max_height: float = math.inf) -> tuple[float, float
     height, x, y : float
         0 height if nothing fits.
     """
-    from shapely import affinity
+    import shapely
     from shapely.geometry import Polygon
     from shapely.ops import polylabel
 
@@ -214,14 +214,15 @@ def fit_label(region, shape, max_height: float = math.inf) -> tuple[float, float
     near_best = region.buffer(-0.9 * radius)
     if not near_best.is_empty and near_best.centroid.within(region):
         center = near_best.centroid
-    hull = shape.convex_hull
+    hull = np.asarray(shape.convex_hull.exterior.coords)
     x0, y0, x1, y1 = region.bounds
-    extent = max(min(np.ptp(np.asarray(hull.exterior.coords), axis=0)), 1e-9)
+    extent = max(min(np.ptp(hull, axis=0)), 1e-9)
     lo, hi = 0.0, 2 * max(x1 - x0, y1 - y0) / extent
-    for _ in range(40):
+    shapely.prepare(region)
+    at = np.array([center.x, center.y])
+    for _ in range(36):
         mid = 0.5 * (lo + hi)
-        placed = affinity.translate(affinity.scale(hull, mid, mid, origin=(0, 0)), center.x, center.y)
-        lo, hi = (mid, hi) if region.contains(placed) else (lo, mid)
+        lo, hi = (mid, hi) if region.contains(shapely.polygons(hull * mid + at)) else (lo, mid)
     return min(lo, max_height), float(center.x), float(center.y)
 
 
