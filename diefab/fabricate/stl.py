@@ -482,7 +482,7 @@ def build_solid(
     ----------
     design : Design
     size_mm : float, optional
-        Overrides ``design.size_mm`` (the length of 2 model units along z).
+        Overrides ``design.size_mm`` (what it measures: ``design.size_note``).
     depth_mm : float
         Engraving depth (embossing height), mm; below ``MAX_DEPTH_FRACTION``
         of the die's thinnest width.
