@@ -287,17 +287,19 @@ def test_3mf_package(gem_solid):
     root = ET.fromstring(zf.read("3D/3dmodel.model"))
     ns = {"m": "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"}
     assert root.get("unit") == "millimeter"
-    volumes, colors = {}, {}
-    for base in root.iterfind(".//m:basematerials/m:base", ns):
-        colors[base.get("name")] = base.get("displaycolor")
-    assert set(colors) == {"body", "labels"} and colors["body"] != colors["labels"]
-    for obj in root.iterfind(".//m:object", ns):
-        if obj.find("m:mesh", ns) is None:
-            assert len(obj.findall(".//m:component", ns)) == 2
-            continue
-        verts = np.array([[float(v.get(k)) for k in "xyz"] for v in obj.iterfind(".//m:vertex", ns)])
-        tris = np.array([[int(t.get(k)) for k in ("v1", "v2", "v3")] for t in obj.iterfind(".//m:triangle", ns)])
-        volumes[obj.get("name").split()[-1]] = mesh_moments(verts, tris)[0]
+    colors = [base.get("displaycolor") for base in root.iterfind(".//m:basematerials/m:base", ns)]
+    names = [base.get("name") for base in root.iterfind(".//m:basematerials/m:base", ns)]
+    assert names == ["body", "labels"] and colors[0] != colors[1]
+    (obj,) = root.iterfind(".//m:object", ns)
+    verts = np.array([[float(v.get(k)) for k in "xyz"] for v in obj.iterfind(".//m:vertex", ns)])
+    triangles = list(obj.iterfind(".//m:triangle", ns))
+    tris = np.array([[int(t.get(k)) for k in ("v1", "v2", "v3")] for t in triangles])
+    part = np.array([int(t.get("p1")) for t in triangles])
+    volumes = {names[k]: mesh_moments(verts, tris[part == k])[0] for k in (0, 1)}
+    # PrusaSlicer's config names the same two triangle ranges as the object's parts
+    config = ET.fromstring(zf.read("Metadata/Slic3r_PE_model.config"))
+    ranges = [(int(v.get("firstid")), int(v.get("lastid"))) for v in config.iter("volume")]
+    assert ranges == [(0, int((part == 0).sum()) - 1), (int((part == 0).sum()), len(part) - 1)]
     # the body with empty pockets, and the labels filling them: together the uncut die
     assert volumes["body"] == pytest.approx(gem_solid.volume_mm3, rel=1e-6)
     assert volumes["labels"] == pytest.approx(gem_solid.report["engraved_volume_mm3"], rel=1e-3)

@@ -911,47 +911,58 @@ def threemf_bytes(solid: Solid) -> bytes:
     """3MF package (core specification, unit millimetre): the die as one object of two coloured parts.
 
     The body (pockets empty, no raised text) and the labels (:attr:`Solid.inlay`)
-    are separate meshes with their own base material, grouped as the
-    components of one object, so a multi-material printer prints the values
-    in a second colour.  A die without labels is one mesh.
+    are two closed shells of one object's mesh; every triangle names its base
+    material (body or labels, each with a display colour), and PrusaSlicer's
+    ``Metadata/Slic3r_PE_model.config`` names the two triangle ranges as the
+    object's two parts, so a multi-material printer prints the values in a
+    second colour.  A die without labels is one shell.
     """
     from xml.sax.saxutils import escape, quoteattr
 
     name = escape(solid.design.name)
-
-    def mesh(vertices: np.ndarray, triangles: np.ndarray) -> str:
-        verts = "".join(f'<vertex x="{x:.6f}" y="{y:.6f}" z="{z:.6f}"/>' for x, y, z in solid.on_bed(vertices))
-        tris = "".join(f'<triangle v1="{a}" v2="{b}" v3="{c}"/>' for a, b, c in triangles)
-        return f"<mesh><vertices>{verts}</vertices><triangles>{tris}</triangles></mesh>"
-
+    parts = (
+        [("body", *solid.base), ("labels", *solid.inlay)]
+        if solid.inlay is not None and solid.base
+        else [("body", solid.vertices, solid.triangles)]
+    )
+    verts, tris, ranges, offset, first = [], [], [], 0, 0
+    for index, (part, vertices, triangles) in enumerate(parts):
+        verts.extend(f'<vertex x="{x:.6f}" y="{y:.6f}" z="{z:.6f}"/>' for x, y, z in solid.on_bed(vertices))
+        tris.extend(
+            f'<triangle v1="{a + offset}" v2="{b + offset}" v3="{c + offset}" pid="1" p1="{index}"/>'
+            for a, b, c in triangles
+        )
+        ranges.append((part, first, first + len(triangles) - 1))
+        offset, first = offset + len(vertices), first + len(triangles)
     materials = (
         f'<basematerials id="1"><base name="body" displaycolor={quoteattr(BODY_COLOR)}/>'
         f'<base name="labels" displaycolor={quoteattr(LABEL_COLOR)}/></basematerials>'
     )
-    if solid.inlay is None or solid.base is None:
-        body = mesh(solid.vertices, solid.triangles)
-        objects = f'<object id="2" type="model" name="{name}" pid="1" pindex="0">{body}</object>'
-        top = 2
-    else:
-        objects = (
-            f'<object id="2" type="model" name="{name} body" pid="1" pindex="0">{mesh(*solid.base)}</object>'
-            f'<object id="3" type="model" name="{name} labels" pid="1" pindex="1">{mesh(*solid.inlay)}</object>'
-            f'<object id="4" type="model" name="{name}"><components>'
-            '<component objectid="2"/><component objectid="3"/></components></object>'
-        )
-        top = 4
     model = (
         '<?xml version="1.0" encoding="UTF-8"?>\n'
         '<model unit="millimeter" xml:lang="en-US" '
-        'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02">'
+        'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02" '
+        'xmlns:slic3rpe="http://schemas.slic3r.org/3mf/2017/06">'
+        '<metadata name="slic3rpe:Version3mf">1</metadata>'
         f'<metadata name="Title">{name}</metadata>'
         '<metadata name="Application">diefab</metadata>'
-        f"<resources>{materials}{objects}</resources>"
-        f'<build><item objectid="{top}"/></build></model>'
+        f'<resources>{materials}<object id="2" type="model" name="{name}" pid="1" pindex="0">'
+        f"<mesh><vertices>{''.join(verts)}</vertices><triangles>{''.join(tris)}</triangles></mesh></object>"
+        '</resources><build><item objectid="2"/></build></model>'
+    )
+    volumes = "".join(
+        f'<volume firstid="{lo}" lastid="{hi}"><metadata type="volume" key="name" value="{name} {part}"/>'
+        '<metadata type="volume" key="volume_type" value="ModelPart"/></volume>'
+        for part, lo, hi in ranges
+    )
+    config = (
+        '<?xml version="1.0" encoding="UTF-8"?>\n<config><object id="2" instances_count="1">'
+        f'<metadata type="object" key="name" value="{name}"/>{volumes}</object></config>'
     )
     buf = io.BytesIO()
     with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as zf:
         zf.writestr("[Content_Types].xml", _CONTENT_TYPES)
         zf.writestr("_rels/.rels", _RELS)
         zf.writestr("3D/3dmodel.model", model)
+        zf.writestr("Metadata/Slic3r_PE_model.config", config)
     return buf.getvalue()
