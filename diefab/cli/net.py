@@ -26,7 +26,7 @@ SIZE_HELP = (
 @click.option("--face-names", is_flag=True, help="Also print the small face names (f1, f2, ...).")
 @click.option("--tab-width", type=float, default=5.0, show_default=True,
               help="Glue-tab width before narrowing, mm; 0 for no tabs (edges lettered on both sides).")  # fmt: skip
-@click.option("--copies", type=click.IntRange(min=1), default=1, show_default=True, help="Dice on the sheet(s).")
+@click.option("--copies", type=click.IntRange(1, 1000), default=1, show_default=True, help="Dice on the sheet(s).")
 @click.option("--mark", type=click.Choice(["bar", "period", "none"]), default="bar", show_default=True,
               help="Mark on a label that reads as another label of the die upside down (6 and 9).")  # fmt: skip
 @click.option("--pips", is_flag=True, help="Draw values 1 to 9 as pips.")

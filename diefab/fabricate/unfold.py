@@ -152,7 +152,8 @@ class Net:
     tabs : tuple of Tab
         One per cut edge.
     edge_labels : dict edge index -> str
-        The short label shared by a tab and its matching edge.
+        The letter of every cut edge, shared by its tab and the matching edge
+        (without tabs, printed on both sides of the cut).
     """
 
     poly: Polyhedron
