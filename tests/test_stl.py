@@ -487,3 +487,20 @@ def test_small_die_warns():
     solid = build_solid(load_design("d6"), size_mm=7.5, min_text_height_mm=1.0)
     assert any("under about 8 mm" in w for w in solid.warnings)
     assert not any("under about 8 mm" in w for w in build_solid(load_design("d6")).warnings)
+
+
+def test_cli_inlay_pips_bed_and_reading(tmp_path, run):
+    import json
+
+    code, out, err = run(
+        "stl", "d6", "--pips", "--emboss", "--inlay", "--format", "stl,3mf", "--out", tmp_path, "--json"
+    )  # fmt: skip
+    assert code == 0, err
+    report = json.loads(out)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d6-inlay.stl", "d6.3mf", "d6.stl"]
+    assert report["reading"] == "read the face on top" and report["engraved"] == [report["bed_face"]]
+    inlay = _load_stl((tmp_path / "d6-inlay.stl").read_bytes())
+    assert inlay.is_watertight and inlay.body_count == 21  # 1 + 2 + ... + 6 pips
+    code, out, err = run("stl", "fudge-gem", "--bed", "f1", "--out", tmp_path / "b")
+    assert code == 0 and "printed on face f1" in out and "a point up means 0" in out
+    assert "−4" in out and "+4" in out  # one value format: a true minus and a plus sign

@@ -116,7 +116,7 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face
         f"{r['engraved_volume_mm3']:.1f}); watertight {r['watertight']}, bodies {r['bodies']}, genus {r['genus']}\n"
         f"mass {r['mass_g']:.2f} g printed ({fill.wall_mm:g} mm walls, {fill.infill:.0%} infill), "
         f"{r['mass_solid_g']:.2f} g solid, at {density:g} g/cm³\n"
-        f"centre of mass shift: engraving {r['com_shift_norm_mm'] * 1000:.1f} µm, "
+        f"centre of mass shift: {'labels' if r['embossed'] else 'engraving'} {r['com_shift_norm_mm'] * 1000:.1f} µm, "
         f"infill {r['infill_com_shift_norm_mm'] * 1000:.1f} µm"
     )
     before = r["probabilities"]["rounded" if round_mm else "sharp"]
