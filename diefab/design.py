@@ -27,7 +27,7 @@ from typing import Any
 import numpy as np
 
 from .errors import DesignError, GeometryError
-from .families import family, gem_polyhedron
+from .families import family
 from .geometry import Polyhedron, face_margins, up_faces
 from .mass import Fill, MassProperties, mass_properties
 from .targets import Target, parse_target
@@ -66,7 +66,8 @@ class Design:
     ----------
     name : str
     family : str
-        ``gem``, ``convex`` or ``mesh``.
+        A family of :mod:`diefab.families` (``gem``, ``ngem``, ``prism``, ...,
+        ``convex`` or ``mesh``).
     params : mapping str -> float
         Family parameters (the gem's a, b, c, d and optional e).
     values : mapping str -> int
@@ -76,9 +77,9 @@ class Design:
     labels : mapping str -> str
         Overrides of the computed label text, keyed by the face that carries it.
     size_mm : float
-        Physical size: the length that measures 2 model units along z (the
-        gem's girdle short side; for ``convex``/``mesh`` the largest side of
-        the bounding box).
+        Physical size of the family's reference length (the gem's girdle
+        short side; for ``convex``/``mesh`` the largest side of the bounding
+        box; see each family's ``reference``).
     fill : Fill
     physics : mapping
         Simulation settings stored with the design (see :mod:`diefab.physics`).
@@ -131,8 +132,9 @@ class Design:
     @cached_property
     def polyhedron(self) -> Polyhedron:
         """The die in model units."""
-        if self.family == "gem":
-            return gem_polyhedron(self.params)
+        fam = family(self.family)
+        if fam.build is not None:
+            return fam.polyhedron(self.params)
         try:
             if self.family == "convex":
                 if self.faces is None:
@@ -159,9 +161,7 @@ class Design:
     @cached_property
     def mm_per_unit(self) -> float:
         """Millimetres per model unit."""
-        if self.family == "gem":
-            return self.size_mm / 2.0
-        return self.size_mm / float(np.ptp(self.polyhedron.vertices, axis=0).max())
+        return self.size_mm / family(self.family).length(self.polyhedron)
 
     @cached_property
     def label_face(self) -> dict[str, str | None]:

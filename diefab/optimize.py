@@ -140,10 +140,9 @@ class Problem:
 
 
 def _polyhedron(design: Design, params: dict[str, float]) -> Polyhedron:
-    if design.family == "gem":
-        from .families import gem_polyhedron
-
-        return gem_polyhedron(params)
+    fam = family(design.family)
+    if fam.build is not None:
+        return fam.polyhedron(params)
     return replace(design, params=params).polyhedron
 
 
@@ -187,9 +186,10 @@ def optimize_design(
     model, objective, min_margin
         See :class:`Problem`.
     names : sequence of str, optional
-        Parameters to optimize; default all of the family's (for the gem
-        a, b, c, d and the paper's suggested fifth, e; pass ``("a", "b",
-        "c", "d")`` for the paper's four-parameter gem with e = a b).
+        Parameters to optimize; default the family's free ones for this die
+        (:meth:`~diefab.families.Family.free_names`: for the gem a, b, c, d
+        and the paper's suggested fifth, e; pass ``("a", "b", "c", "d")`` for
+        the paper's four-parameter gem with e = a b).
     starts : int
         Random starting points, drawn with ``numpy.random.default_rng(seed)``
         uniformly in the box, in addition to the design itself.
@@ -212,7 +212,7 @@ def optimize_design(
         raise DesignError(f"starts={starts} must be >= 0")
     fam = family(design.family)
     if names is None:
-        names = [p.name for p in fam.parameters]
+        names = fam.free_names(design.params)
     problem = Problem(design, tuple(names), model, objective, min_margin)
     rng = np.random.default_rng(seed)
     x0s = [problem.unit(fam.complete(design.params)), *rng.random((starts, len(names)))]

@@ -212,7 +212,7 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         history, warning = log.read()
         run_name = Path(resume).name
     else:
-        names = free_parameters(d, free) or [p.name for p in family(d.family).parameters]
+        names = free_parameters(d, free) or family(d.family).free_names(d.params)
         run_name = name or f"{d.name}-simulation-opt"
         log = RunLog(out_dir / run_name)
         if log.path.exists():
