@@ -7,8 +7,8 @@ in the parameter box; the stability constraint is an extreme barrier: a point
 whose smallest face margin is below `min_margin` scores ``1 + violation``,
 far above any feasible objective, so the simplex is pushed back inside
 without the optimum being dragged onto the boundary.  A stable point that
-cannot be labelled (two resting faces showing the same top face) scores
-``1 + UNREADABLE``.
+cannot be read (:mod:`diefab.readings`: nothing clearly on top, or two
+values printed in one place) scores ``1 + UNREADABLE``.
 
 Examples
 --------
@@ -29,9 +29,10 @@ import numpy as np
 from .design import Design
 from .errors import DesignError
 from .families import family
-from .geometry import Polyhedron, face_margins, up_faces
+from .geometry import Polyhedron, face_margins
 from .mass import mass_properties
 from .models import MODELS
+from .readings import unreadable
 from .stats import jsd, pearson_divergence, tvd
 
 __all__ = ["OBJECTIVES", "OptimizationResult", "Problem", "optimize_design"]
@@ -44,8 +45,7 @@ OBJECTIVES: dict[str, Callable[[np.ndarray, np.ndarray], float]] = {
 
 #: Score of a point that violates the stability constraint (plus the violation).
 INFEASIBLE = 1.0
-#: Added to the score of a stable point that cannot be labelled (two resting
-#: faces would show the same face on top, see :attr:`diefab.design.Design.label_of`).
+#: Added to the score of a stable point that cannot be read (see :mod:`diefab.readings`).
 UNREADABLE = 0.5
 #: Score of a point that is not a valid polyhedron at all.
 INVALID = 1e6
@@ -69,6 +69,10 @@ class Problem:
         ``eq2`` (the paper's Eq. (2)), ``tvd`` or ``jsd``.
     min_margin : float
         Smallest acceptable stability margin of every face, model units.
+    correction : (m,) float, optional
+        Added to the model's face probabilities (then clipped at 0 and
+        renormalized): simulated minus modelled frequencies at a nearby
+        design, so that the model is corrected where the simulation was run.
     """
 
     design: Design
@@ -76,6 +80,7 @@ class Problem:
     model: str = "solid-angle"
     objective: str = "eq2"
     min_margin: float = 0.05
+    correction: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.model not in MODELS:
@@ -115,6 +120,9 @@ class Problem:
         center = mass_properties(poly, design.fill, mm_per_unit=design.mm_per_unit).center
         margins = face_margins(poly, center)
         probs = MODELS[self.model](poly, center)
+        if self.correction is not None:
+            probs = np.clip(probs + self.correction, 0.0, None)
+            probs = probs / probs.sum()
         values = np.bincount(self._value_index, weights=probs, minlength=len(design.support))
         score = OBJECTIVES[self.objective](values, self._target)
         violation = self.min_margin - margins.min()
@@ -125,9 +133,8 @@ class Problem:
         return score, values, margins
 
     def _readable(self, poly: Polyhedron) -> bool:
-        """True if no two resting faces put the same face on top (unless the design sets its text)."""
-        tops = [u for u in up_faces(poly) if u is not None and poly.names[u] not in self.design.labels]
-        return len(tops) == len(set(tops))
+        """True if every resting face can be read (:mod:`diefab.readings`; hand-set labels excepted)."""
+        return unreadable(poly, self.design.values, tuple(self.design.labels)) is None
 
     @cached_property
     def _value_index(self) -> np.ndarray:
@@ -175,6 +182,7 @@ def optimize_design(
     seed: int = 0,
     name: str | None = None,
     max_evaluations: int = 4000,
+    correction: np.ndarray | None = None,
 ) -> OptimizationResult:
     """Multi-start Nelder--Mead over the family's parameters.
 
@@ -183,7 +191,7 @@ def optimize_design(
     design : Design
         Starting design: family, values, target, fill; its own parameters are
         one of the starts.
-    model, objective, min_margin
+    model, objective, min_margin, correction
         See :class:`Problem`.
     names : sequence of str, optional
         Parameters to optimize; default the family's free ones for this die
@@ -213,7 +221,7 @@ def optimize_design(
     fam = family(design.family)
     if names is None:
         names = fam.free_names(design.params)
-    problem = Problem(design, tuple(names), model, objective, min_margin)
+    problem = Problem(design, tuple(names), model, objective, min_margin, correction)
     rng = np.random.default_rng(seed)
     x0s = [problem.unit(fam.complete(design.params)), *rng.random((starts, len(names)))]
     evaluations = 0

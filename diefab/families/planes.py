@@ -50,7 +50,7 @@ def polyhedron_from_planes(normals: np.ndarray, offsets: np.ndarray) -> Polyhedr
     offsets = np.asarray(offsets, dtype=float)
     if np.any(offsets <= 0):
         raise GeometryError("every plane offset must be positive (the origin must lie inside the die)")
-    if np.linalg.matrix_rank(normals) < 3 or _open_direction(normals):
+    if _open_direction(normals):
         raise GeometryError("the planes do not enclose a bounded solid")
     try:
         cut = HalfspaceIntersection(np.column_stack([normals, -offsets]), np.zeros(3))
@@ -59,38 +59,30 @@ def polyhedron_from_planes(normals: np.ndarray, offsets: np.ndarray) -> Polyhedr
     points = cut.intersections
     if not np.all(np.isfinite(points)):
         raise GeometryError("the planes do not enclose a bounded solid")
-    scale = max(1.0, float(np.abs(points).max()))
-    points = _unique(points, tol.LENGTH * 1e3 * scale)
-    hull = Polyhedron.from_points(points, strict=False)
-    order = []
+    eps = tol.LENGTH * 1e3 * max(1.0, float(np.abs(points).max()))
+    close = np.abs(points[:, None, :] - points[None, :, :]).max(axis=2) < eps
+    points = points[~np.tril(close, -1).any(axis=1)]  # near-duplicates (several planes through one vertex)
+    on = np.abs(points @ normals.T - offsets) < eps
+    faces = []
     for k in range(len(normals)):
-        match = np.flatnonzero(
-            (hull.normals @ normals[k] > 1 - tol.COPLANAR) & (np.abs(hull.offsets - offsets[k]) < 1e-7 * scale)
-        )
-        if len(match) != 1:
+        ring = np.flatnonzero(on[:, k])
+        if len(ring) < 3:
             raise GeometryError(f"plane f{k + 1} does not cut a face of the die")
-        order.append(int(match[0]))
-    if len(set(order)) != len(hull.faces):
-        raise GeometryError("the die has a face that is on no plane")
-    return Polyhedron(hull.vertices, tuple(hull.faces[j] for j in order))
+        # counter-clockwise seen from outside: by angle about the normal
+        u = np.cross(normals[k], [1.0, 0, 0] if abs(normals[k, 0]) < 0.9 else [0, 1.0, 0])
+        v = np.cross(normals[k], u)
+        rel = points[ring] - points[ring].mean(axis=0)
+        faces.append(ring[np.argsort(np.arctan2(rel @ v, rel @ u))])
+    return Polyhedron(points, tuple(faces))
 
 
 def _open_direction(normals: np.ndarray) -> bool:
-    """True if some direction d has ``normals @ d <= 0`` for every plane (the solid is unbounded along d)."""
-    from scipy.optimize import linprog
+    """True if some direction escapes every plane (the normals do not surround the origin)."""
+    from scipy.spatial import ConvexHull, QhullError
 
-    # Bounded iff the normals positively span R^3: no d with N d <= 0 and sum(N d) = -1.
-    res = linprog(
-        np.zeros(3), A_ub=normals, b_ub=np.zeros(len(normals)), A_eq=normals.sum(axis=0, keepdims=True),
-        b_eq=[-1.0], bounds=[(None, None)] * 3, method="highs",
-    )  # fmt: skip
-    return bool(res.status == 0)
-
-
-def _unique(points: np.ndarray, eps: float) -> np.ndarray:
-    """`points` with near-duplicates (closer than `eps`) merged."""
-    keep: list[np.ndarray] = []
-    for p in points:
-        if not any(np.abs(p - q).max() < eps for q in keep):
-            keep.append(p)
-    return np.array(keep)
+    # Bounded iff the origin is strictly inside the convex hull of the normals.
+    try:
+        hull = ConvexHull(normals)
+    except QhullError:
+        return True
+    return bool(np.any(hull.equations[:, 3] > -tol.CONVEXITY))

@@ -1,0 +1,264 @@
+"""From a target to a die: pick a family and face count, assign values, optimize, check.
+
+:func:`candidates` lists the families and face counts that can carry a
+target's values; :func:`synthesize` optimizes each under a deterministic
+model (its values assigned by :func:`~diefab.assignment.assign_values` on
+the starting shape), keeps the best, and -- with ``model="simulation"`` --
+refines it against pybullet: it drops the die, adds the simulated-minus-
+modelled face frequencies to the model as a correction, re-optimizes, and
+repeats while time is left, keeping the design whose simulated distance to
+the target is smallest.  The caller validates the result on a fresh seed.
+
+Examples
+--------
+>>> from diefab.targets import parse_target
+>>> [(c.family, c.faces) for c in candidates(parse_target("2d6"))][:3]
+[('ngem', 11), ('prism', 11), ('freeform', 11)]
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from math import ceil
+
+import numpy as np
+
+from .assignment import assign_values, face_classes
+from .design import Design
+from .errors import DesignError
+from .families import family as get_family
+from .mass import Fill, mass_properties
+from .models import MODELS
+from .optimize import INFEASIBLE, optimize_design
+from .stats import tvd
+from .targets import Target
+
+__all__ = ["Candidate", "Synthesis", "candidates", "synthesize"]
+
+#: Model used to rank candidates and to start the simulation refinement.
+RANK_MODEL = "fast"
+#: Drops per simulation of a refinement step.
+REFINE_DROPS = 20_000
+#: Most refinement steps.
+REFINE_STEPS = 6
+#: Refinement stops once the simulated TVD is below this.
+REFINE_GOAL = 0.008
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A family, its structural parameters and a starting shape, with the number of faces that carry values."""
+
+    family: str
+    params: dict[str, float]
+    faces: int
+
+    def polyhedron(self):
+        return get_family(self.family).polyhedron(self.params)
+
+
+def _symmetric(target: Target) -> bool:
+    """True if the target's probabilities read the same backwards over equally spaced values."""
+    v, q = target.values, target.probabilities
+    return bool(np.allclose(q, q[::-1], atol=1e-12) and np.allclose(np.diff(v), np.diff(v)[0]))
+
+
+def _levels(target: Target) -> int:
+    return len(np.unique(np.round(target.probabilities, 12)))
+
+
+def candidates(target: Target, faces: int | None = None, family: str | None = None) -> list[Candidate]:
+    """Families and face counts that can carry `target`'s values, simplest first.
+
+    Parameters
+    ----------
+    faces : int, optional
+        Only dice with this many resting faces.
+    family : str, optional
+        Only this family.
+
+    Raises
+    ------
+    DesignError
+        If nothing fits.
+    """
+    k = len(target.values)
+    asym = {} if _symmetric(target) else {"sx": 0.1, "sz": 0.05}
+    found: list[Candidate] = []
+    first = max(3, ceil((k - 1) / 2))
+    for n in range(first, min(first + 2, 13)):
+        found.append(Candidate("ngem", {"n": n, "a": 1.3, "b": 0.6, "c": 0.5, "d": 1.5, **asym}, 2 * n + 1))
+    if k <= 6:
+        found.append(Candidate("cuboid", {"x": 1.0, "z": 0.9, "t": 0.1}, 6))
+    n = max(3, k - 2)
+    if n <= 12:
+        found.append(Candidate("prism", {"n": n, "l": 1.0}, n + 2))
+    if _levels(target) <= 2:
+        for n in range(max(3, ceil(k / 2)), 13):
+            if (2 * n) % k == 0:
+                found.append(Candidate("bipyramid", {"n": n, "h": 1.2, "g": 1.0}, 2 * n))
+                found.append(Candidate("trapezohedron", {"n": n, "t": 0.7, "u": 0.8}, 2 * n))
+                break
+    for n in sorted({max(6, k), max(6, k) + 2}):
+        if n <= 30:
+            found.append(Candidate("freeform", {"n": n}, n))
+    if family is not None:
+        get_family(family)  # an unknown name raises with the list of families
+        found = [c for c in found if c.family == family]
+        if not found and faces is not None:
+            found = [_forced(family, faces, asym)]
+    if faces is not None:
+        found = [c for c in found if c.faces == faces] or ([_forced(family, faces, asym)] if family else [])
+        if faces < k:
+            raise DesignError(f"--faces {faces} is fewer than the target's {k} values")
+    if not found:
+        raise DesignError(
+            f"no family{' ' + family if family else ''} with{'' if faces is None else f' {faces}'} faces "
+            f"fits the {k} values of target {target.spec!r}"
+        )
+    return sorted(found, key=lambda c: c.faces)
+
+
+def _forced(family: str, faces: int, asym: dict[str, float]) -> Candidate:
+    """The member of `family` with `faces` faces, when the family has one."""
+    if family == "ngem" and faces % 2 == 1 and 7 <= faces <= 25:
+        return Candidate("ngem", {"n": (faces - 1) // 2, "a": 1.3, "b": 0.6, "c": 0.5, "d": 1.5, **asym}, faces)
+    if family == "prism" and 5 <= faces <= 14:
+        return Candidate("prism", {"n": faces - 2, "l": 1.0}, faces)
+    if family in ("bipyramid", "trapezohedron") and faces % 2 == 0 and 6 <= faces <= 24:
+        params = {"h": 1.2, "g": 1.0} if family == "bipyramid" else {"t": 0.7, "u": 0.8}
+        return Candidate(family, {"n": faces // 2, **params}, faces)
+    if family == "cuboid" and faces == 6:
+        return Candidate("cuboid", {"x": 1.0, "z": 0.9, "t": 0.1}, 6)
+    if family == "freeform" and 6 <= faces <= 30:
+        return Candidate("freeform", {"n": faces}, faces)
+    raise DesignError(f"family {family!r} has no die with {faces} faces")
+
+
+@dataclass
+class Synthesis:
+    """What :func:`synthesize` found."""
+
+    design: Design
+    objective: float
+    #: (k,) value probabilities under the model the design was optimized for.
+    predicted: np.ndarray
+    model: str
+    #: Every candidate tried: family, faces, objective.
+    tried: list[dict] = field(default_factory=list)
+    #: Refinement steps: simulated TVD at each.
+    steps: list[dict] = field(default_factory=list)
+
+
+def _start(candidate: Candidate, target: Target, name: str, fill: Fill, size_mm: float) -> Design:
+    """The candidate's starting design with values assigned from its starting shape."""
+    poly = candidate.polyhedron()
+    center = mass_properties(poly, fill).center
+    probs = MODELS["solid-angle"](poly, center)
+    values = assign_values(probs, poly.names, target, face_classes(poly, center))
+    return Design(name, candidate.family, candidate.params, values=values, target=target.spec, fill=fill,
+                  size_mm=size_mm)  # fmt: skip
+
+
+def synthesize(
+    target: Target,
+    *,
+    faces: int | None = None,
+    family: str | None = None,
+    fill: Fill | None = None,
+    model: str = "simulation",
+    budget_seconds: float = 480.0,
+    seed: int = 0,
+    name: str = "die",
+    size_mm: float = 30.0,
+    min_margin: float = 0.05,
+    workers: int | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> Synthesis:
+    """Design a die for `target`.
+
+    Parameters
+    ----------
+    model : {"fast", "solid-angle", "basins", "simulation"}
+        The landing model optimized (``basins`` when registered in
+        :data:`diefab.models.MODELS`); ``simulation`` optimizes the fast
+        model and then refines it against pybullet drops.
+    budget_seconds : float
+        Wall time for the whole search; the refinement stops when it runs out.
+    seed : int
+        Seeds the optimizer's random starts and the refinement's drops.
+
+    Raises
+    ------
+    DesignError
+        If no candidate reaches a stable, readable die.
+    """
+    fill = fill or Fill()
+    say = progress or (lambda text: None)
+    t0 = time.monotonic()
+    rank_model = RANK_MODEL if model == "simulation" else model
+    if rank_model not in MODELS:
+        raise DesignError(f"model {model!r} is not available (models: {', '.join([*MODELS, 'simulation'])})")
+    best = None
+    tried = []
+    pool = candidates(target, faces, family)
+    for i, cand in enumerate(pool):
+        share = 0.4 * budget_seconds / len(pool) if model == "simulation" else budget_seconds / len(pool)
+        if i and time.monotonic() - t0 > (0.5 if model == "simulation" else 1.0) * budget_seconds:
+            break
+        try:
+            start = _start(cand, target, name, fill, size_mm)
+            result = optimize_design(start, model=rank_model, min_margin=min_margin, starts=2, seed=seed, name=name,
+                                     max_evaluations=_evaluations(share))  # fmt: skip
+        except DesignError as exc:
+            tried.append({"family": cand.family, "faces": cand.faces, "objective": None, "error": str(exc)})
+            say(f"{cand.family} ({cand.faces} faces): {exc}")
+            continue
+        tried.append({"family": cand.family, "faces": cand.faces, "objective": result.objective})
+        say(f"{cand.family} ({cand.faces} faces): Eq. (2) {result.objective:.5f} under the {rank_model} model")
+        if best is None or result.objective < best.objective - 1e-6:
+            best = result
+    if best is None or best.objective >= INFEASIBLE:
+        raise DesignError(f"no stable, readable die found for target {target.spec!r} (tried {len(tried)} dice)")
+    out = Synthesis(best.design, best.objective, best.values, rank_model, tried)
+    if model == "simulation":
+        _refine(out, target, t0 + budget_seconds, seed, min_margin, workers, say)
+    return out
+
+
+def _evaluations(seconds: float) -> int:
+    """Nelder--Mead evaluations per start that fit in about `seconds` (about 2 ms each)."""
+    return int(np.clip(seconds / 0.004, 300, 3000))
+
+
+def _refine(out: Synthesis, target: Target, deadline: float, seed: int, min_margin: float, workers, say) -> None:
+    """Correct the model by simulation until the simulated TVD is small or time runs out (updates `out`)."""
+    from .physics import simulate
+
+    goal = target.aligned(out.design.support)
+    design, objective, predicted = out.design, out.objective, out.predicted
+    best_tvd = np.inf
+    for step in range(REFINE_STEPS):
+        if time.monotonic() > deadline:
+            break
+        sim = simulate(design, REFINE_DROPS, seed=seed + step, workers=workers)
+        distance = tvd(sim.value_probabilities(design), goal)
+        out.steps.append({"step": step, "params": dict(design.params), "simulated_tvd": float(distance)})
+        say(f"refinement {step}: simulated TVD {distance:.4f} at {REFINE_DROPS} drops")
+        if distance < best_tvd:
+            best_tvd = distance
+            out.design, out.objective, out.predicted = design, objective, predicted
+        if distance < REFINE_GOAL or time.monotonic() > deadline:
+            break
+        center = design.mass_properties().center
+        correction = sim.face_probabilities - MODELS[RANK_MODEL](design.polyhedron, center)
+        try:
+            result = optimize_design(design, model=RANK_MODEL, min_margin=min_margin, starts=0, seed=seed,
+                                     name=design.name, correction=correction)  # fmt: skip
+        except DesignError:
+            break
+        design = replace(result.design, description=design.description)
+        objective, predicted = result.objective, result.values
+    out.model = "simulation"
