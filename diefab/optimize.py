@@ -123,14 +123,31 @@ class Problem:
         if self.correction is not None:
             probs = np.clip(probs + self.correction, 0.0, None)
             probs = probs / probs.sum()
-        values = np.bincount(self._value_index, weights=probs, minlength=len(design.support))
+        values = np.bincount(self._value_index, weights=np.where(self._resting, probs, 0.0),
+                             minlength=len(design.support))  # fmt: skip
         score = OBJECTIVES[self.objective](values, self._target)
-        violation = self.min_margin - margins.min()
+        violation = self.violation(margins)
         if violation >= 0:
             score = INFEASIBLE + violation
         elif not self._readable(poly):
             score = INFEASIBLE + UNREADABLE
         return score, values, margins
+
+    def violation(self, margins: np.ndarray) -> float:
+        """How far a die with these face margins is from feasible (< 0: feasible).
+
+        Every face with a value must hold the die by more than `min_margin`;
+        every transitional face must tip it off by more than `min_margin`.
+        """
+        mask = self._resting
+        need = self.min_margin - margins[mask].min()
+        if not mask.all():
+            need = max(need, self.min_margin + margins[~mask].max())
+        return float(need)
+
+    @cached_property
+    def _resting(self) -> np.ndarray:
+        return self.design.resting_mask()
 
     def _readable(self, poly: Polyhedron) -> bool:
         """True if every resting face can be read (:mod:`diefab.readings`; hand-set labels excepted)."""
@@ -138,8 +155,11 @@ class Problem:
 
     @cached_property
     def _value_index(self) -> np.ndarray:
+        """(m,) int: each face's value index; transitional faces (probability 0) count for the first."""
         index = {v: i for i, v in enumerate(self.design.support)}
-        return np.array([index[self.design.values[n]] for n in self.design.polyhedron.names])
+        return np.array(
+            [index[self.design.values.get(n, self.design.support[0])] for n in self.design.polyhedron.names]
+        )
 
     @cached_property
     def _target(self) -> np.ndarray:
@@ -167,8 +187,13 @@ class OptimizationResult:
 
     @property
     def binding_face(self) -> str:
-        """The face with the smallest stability margin."""
-        return self.design.polyhedron.names[int(np.argmin(self.margins))]
+        """The face with a value with the smallest stability margin."""
+        return self.design.polyhedron.names[int(np.argmin(np.where(self.design.resting_mask(), self.margins, np.inf)))]
+
+    @property
+    def min_margin(self) -> float:
+        """The smallest stability margin of a face with a value."""
+        return float(self.margins[self.design.resting_mask()].min())
 
 
 def optimize_design(
@@ -269,7 +294,7 @@ def optimize_design(
         name=name or f"{design.name}-{model}-opt",
         description=(
             f"{design.name} optimized for {design.target} under the {model} model "
-            f"({objective} = {f:.3g}, min margin {margins.min():.3f})"
+            f"({objective} = {f:.3g}, min margin {margins[design.resting_mask()].min():.3f})"
         ),
     )
     return OptimizationResult(result_design, f, values, margins, evaluations, len(x0s), feasible)

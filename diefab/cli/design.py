@@ -123,7 +123,9 @@ def _print_report(d, report: dict, path: Path) -> None:
     for face, value in d.values.items():
         faces_of.setdefault(value, []).append(face)
     for v in d.support:
-        table.add_row(str(v), " ".join(faces_of[v]), f"{report['predicted'][str(v)]:.4f}", f"{report['target'][str(v)]:.4f}")
+        table.add_row(
+            str(v), " ".join(faces_of[v]), f"{report['predicted'][str(v)]:.4f}", f"{report['target'][str(v)]:.4f}"
+        )
     con.print(table)
     con.print(f"Eq. (2) {report['objective']:.5f}, TVD {report['tvd']:.4f} under the {report['model']} model")
     v = report["validated"]
