@@ -20,6 +20,7 @@ True
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
@@ -173,6 +174,10 @@ def _polyhedron(design: Design, params: dict[str, float]) -> Polyhedron:
     return replace(design, params=params).polyhedron
 
 
+class _OutOfTime(Exception):
+    """The optimizer's deadline passed."""
+
+
 @dataclass(frozen=True, eq=False)
 class OptimizationResult:
     """The best design found and how it was found."""
@@ -208,6 +213,7 @@ def optimize_design(
     name: str | None = None,
     max_evaluations: int = 4000,
     correction: np.ndarray | None = None,
+    deadline: float | None = None,
 ) -> OptimizationResult:
     """Multi-start Nelder--Mead over the family's parameters.
 
@@ -228,6 +234,9 @@ def optimize_design(
         uniformly in the box, in addition to the design itself.
     max_evaluations : int
         Limit per start.
+    deadline : float, optional
+        A :func:`time.monotonic` time: the search stops there with the best
+        point seen so far.
 
     Returns
     -------
@@ -251,9 +260,15 @@ def optimize_design(
     x0s = [problem.unit(fam.complete(design.params)), *rng.random((starts, len(names)))]
     evaluations = 0
     best_x, best_f, feasible = None, np.inf, 0
+    seen = {"x": None, "f": np.inf}
 
     def score(x: np.ndarray) -> float:
-        return problem.evaluate(problem.params(x))[0]
+        if deadline is not None and time.monotonic() > deadline:
+            raise _OutOfTime
+        f = problem.evaluate(problem.params(x))[0]
+        if f < seen["f"]:
+            seen["x"], seen["f"] = np.clip(x, 0, 1), f
+        return f
 
     def simplex(x0: np.ndarray):
         return minimize(
@@ -264,23 +279,28 @@ def optimize_design(
             options={"xatol": 1e-5, "fatol": 1e-8, "maxfev": max_evaluations, "adaptive": len(names) > 4},
         )
 
-    for x0 in x0s:
-        res = simplex(x0)
-        evaluations += res.nfev
-        feasible += res.fun < INFEASIBLE
-        if res.fun < best_f:
+    try:
+        for x0 in x0s:
+            seen["f"] = np.inf
+            res = simplex(x0)
+            evaluations += res.nfev
+            feasible += res.fun < INFEASIBLE
+            if res.fun < best_f:
+                best_x, best_f = res.x, float(res.fun)
+        # A simplex that has collapsed against the stability barrier often stops
+        # short; restarting it from the best point with a fresh simplex is the
+        # standard remedy.
+        for _ in range(POLISH_RESTARTS):
+            if best_x is None:
+                break
+            res = simplex(best_x)
+            evaluations += res.nfev
+            if not res.fun < best_f - 1e-12:
+                break
             best_x, best_f = res.x, float(res.fun)
-    # A simplex that has collapsed against the stability barrier often stops
-    # short; restarting it from the best point with a fresh simplex is the
-    # standard remedy.
-    for _ in range(POLISH_RESTARTS):
-        if best_x is None:
-            break
-        res = simplex(best_x)
-        evaluations += res.nfev
-        if not res.fun < best_f - 1e-12:
-            break
-        best_x, best_f = res.x, float(res.fun)
+    except _OutOfTime:  # keep the best point seen, in the interrupted simplex too
+        if seen["f"] < best_f:
+            best_x, best_f = seen["x"], float(seen["f"])
     if best_x is None or best_f >= INFEASIBLE:
         raise DesignError(
             f"no stable design found from {len(x0s)} starts with min_margin={min_margin:g}: "

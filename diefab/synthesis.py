@@ -29,6 +29,7 @@ from .assignment import assign_values, face_classes
 from .design import Design
 from .errors import DesignError
 from .families import family as get_family
+from .geometry import resting_faces
 from .mass import Fill, mass_properties
 from .models import MODELS
 from .optimize import INFEASIBLE, optimize_design
@@ -92,6 +93,8 @@ def candidates(target: Target, faces: int | None = None, family: str | None = No
         found.append(Candidate("ngem", {"n": n, "a": 1.3, "b": 0.6, "c": 0.5, "d": 1.5, **asym}, 2 * n + 1))
     if k <= 6:
         found.append(Candidate("cuboid", {"x": 1.0, "z": 0.9, "t": 0.1}, 6))
+    if 3 <= k <= 12:  # the lateral faces carry the values, the pointed caps are transitional
+        found.append(Candidate("prism", {"n": k, "l": 1.5, "k": 1.0}, k))
     n = max(3, k - 2)
     if n <= 12:
         found.append(Candidate("prism", {"n": n, "l": 1.0}, n + 2))
@@ -125,8 +128,8 @@ def _forced(family: str, faces: int, asym: dict[str, float]) -> Candidate:
     """The member of `family` with `faces` faces, when the family has one."""
     if family == "ngem" and faces % 2 == 1 and 7 <= faces <= 25:
         return Candidate("ngem", {"n": (faces - 1) // 2, "a": 1.3, "b": 0.6, "c": 0.5, "d": 1.5, **asym}, faces)
-    if family == "prism" and 5 <= faces <= 14:
-        return Candidate("prism", {"n": faces - 2, "l": 1.0}, faces)
+    if family == "prism" and 3 <= faces <= 12:
+        return Candidate("prism", {"n": faces, "l": 1.5, "k": 1.0}, faces)
     if family in ("bipyramid", "trapezohedron") and faces % 2 == 0 and 6 <= faces <= 24:
         params = {"h": 1.2, "g": 1.0} if family == "bipyramid" else {"t": 0.7, "u": 0.8}
         return Candidate(family, {"n": faces // 2, **params}, faces)
@@ -153,13 +156,23 @@ class Synthesis:
 
 
 def _start(candidate: Candidate, target: Target, name: str, fill: Fill, size_mm: float) -> Design:
-    """The candidate's starting design with values assigned from its starting shape."""
+    """The candidate's starting design, values assigned from its starting shape.
+
+    Faces the starting shape cannot rest on are transitional (a capped
+    prism's caps), unless that leaves fewer faces than values.
+    """
     poly = candidate.polyhedron()
     center = mass_properties(poly, fill).center
-    probs = MODELS["solid-angle"](poly, center)
-    values = assign_values(probs, poly.names, target, face_classes(poly, center))
+    resting = resting_faces(poly, center)
+    if resting.sum() < len(target.values):  # too few: every face gets a value, the optimizer makes them rest
+        resting[:] = True
+    probs = MODELS["solid-angle"](poly, center)[resting]
+    names = [n for n, r in zip(poly.names, resting) if r]
+    classes = face_classes(poly, center)[resting]
+    values = assign_values(probs, names, target, classes)
+    transitional = [n for n, r in zip(poly.names, resting) if not r]
     return Design(name, candidate.family, candidate.params, values=values, target=target.spec, fill=fill,
-                  size_mm=size_mm)  # fmt: skip
+                  size_mm=size_mm, transitional=transitional)  # fmt: skip
 
 
 def synthesize(
@@ -179,6 +192,10 @@ def synthesize(
 ) -> Synthesis:
     """Design a die for `target`.
 
+    Every candidate (:func:`candidates`) is optimized under the solid-angle
+    model, which is cheap, in an equal share of the time; the best is then
+    optimized under `model`.
+
     Parameters
     ----------
     model : {"fast", "solid-angle", "basins", "simulation"}
@@ -186,7 +203,7 @@ def synthesize(
         :data:`diefab.models.MODELS`); ``simulation`` optimizes the fast
         model and then refines it against pybullet drops.
     budget_seconds : float
-        Wall time for the whole search; the refinement stops when it runs out.
+        Wall time for the whole search; each stage stops when its share runs out.
     seed : int
         Seeds the optimizer's random starts and the refinement's drops.
 
@@ -198,39 +215,41 @@ def synthesize(
     fill = fill or Fill()
     say = progress or (lambda text: None)
     t0 = time.monotonic()
-    rank_model = RANK_MODEL if model == "simulation" else model
-    if rank_model not in MODELS:
+    final_model = RANK_MODEL if model == "simulation" else model
+    if final_model not in MODELS:
         raise DesignError(f"model {model!r} is not available (models: {', '.join([*MODELS, 'simulation'])})")
-    best = None
-    tried = []
     pool = candidates(target, faces, family)
+    rank_share = {"simulation": 0.3, "solid-angle": 1.0}.get(model, 0.6) * budget_seconds
+    best, tried = None, []
     for i, cand in enumerate(pool):
-        share = 0.4 * budget_seconds / len(pool) if model == "simulation" else budget_seconds / len(pool)
-        if i and time.monotonic() - t0 > (0.5 if model == "simulation" else 1.0) * budget_seconds:
-            break
+        deadline = t0 + rank_share * (i + 1) / len(pool)
         try:
             start = _start(cand, target, name, fill, size_mm)
-            result = optimize_design(start, model=rank_model, min_margin=min_margin, starts=2, seed=seed, name=name,
-                                     max_evaluations=_evaluations(share))  # fmt: skip
+            result = optimize_design(start, model="solid-angle", min_margin=min_margin, starts=2, seed=seed,
+                                     name=name, deadline=deadline)  # fmt: skip
         except DesignError as exc:
             tried.append({"family": cand.family, "faces": cand.faces, "objective": None, "error": str(exc)})
             say(f"{cand.family} ({cand.faces} faces): {exc}")
             continue
         tried.append({"family": cand.family, "faces": cand.faces, "objective": result.objective})
-        say(f"{cand.family} ({cand.faces} faces): Eq. (2) {result.objective:.5f} under the {rank_model} model")
+        say(f"{cand.family} ({cand.faces} faces): Eq. (2) {result.objective:.5f} under the solid-angle model")
         if best is None or result.objective < best.objective - 1e-6:
             best = result
     if best is None or best.objective >= INFEASIBLE:
         raise DesignError(f"no stable, readable die found for target {target.spec!r} (tried {len(tried)} dice)")
-    out = Synthesis(best.design, best.objective, best.values, rank_model, tried)
+    if final_model != "solid-angle":
+        polish = t0 + (rank_share + (0.15 if model == "simulation" else 0.4) * budget_seconds)
+        try:
+            again = optimize_design(best.design, model=final_model, min_margin=min_margin, starts=1, seed=seed,
+                                    name=name, deadline=polish)  # fmt: skip
+            say(f"{again.design.family}: Eq. (2) {again.objective:.5f} under the {final_model} model")
+            best = again
+        except DesignError as exc:
+            say(f"the {final_model} model finds no stable die from the solid-angle optimum: {exc}")
+    out = Synthesis(best.design, best.objective, best.values, final_model, tried)
     if model == "simulation":
         _refine(out, target, t0 + budget_seconds, seed, min_margin, workers, say)
     return out
-
-
-def _evaluations(seconds: float) -> int:
-    """Nelder--Mead evaluations per start that fit in about `seconds` (about 2 ms each)."""
-    return int(np.clip(seconds / 0.004, 300, 3000))
 
 
 def _refine(out: Synthesis, target: Target, deadline: float, seed: int, min_margin: float, workers, say) -> None:
