@@ -34,7 +34,7 @@ def test_parallel_faces_read_the_opposite_face_and_odd_prisms_an_edge():
     prism = family("prism").polyhedron({"n": 3, "l": 1.0})
     lateral = readings(prism)[:3]
     assert [r.kind for r in lateral] == ["edge"] * 3
-    for k, r in enumerate(lateral):  # the edge on top runs along the axis, opposite the resting face
+    for r in lateral:  # the edge on top runs along the axis, opposite the resting face
         v, w = prism.vertices[list(r.vertices)]
         assert abs(v[1] - w[1]) == pytest.approx(2.0)
 
