@@ -40,7 +40,7 @@ __all__ = ["Candidate", "Synthesis", "candidates", "synthesize"]
 
 #: Model used to rank candidates and to start the simulation refinement.
 RANK_MODEL = "fast"
-#: Drops per simulation of a refinement step.
+#: Drops per simulation of a refinement step (half at the first).
 REFINE_DROPS = 20_000
 #: Most refinement steps.
 REFINE_STEPS = 6
@@ -259,13 +259,18 @@ def _refine(out: Synthesis, target: Target, deadline: float, seed: int, min_marg
     goal = target.aligned(out.design.support)
     design, objective, predicted = out.design, out.objective, out.predicted
     best_tvd = np.inf
+    per_drop = 0.0
     for step in range(REFINE_STEPS):
-        if time.monotonic() > deadline:
+        drops = REFINE_DROPS if step else REFINE_DROPS // 2
+        if time.monotonic() + per_drop * drops > deadline:
             break
-        sim = simulate(design, REFINE_DROPS, seed=seed + step, workers=workers)
+        sim = simulate(design, drops, seed=seed + step, workers=workers)
+        per_drop = sim.seconds / drops
         distance = tvd(sim.value_probabilities(design), goal)
-        out.steps.append({"step": step, "params": dict(design.params), "simulated_tvd": float(distance)})
-        say(f"refinement {step}: simulated TVD {distance:.4f} at {REFINE_DROPS} drops")
+        out.steps.append(
+            {"step": step, "drops": drops, "params": dict(design.params), "simulated_tvd": float(distance)}
+        )
+        say(f"refinement {step}: simulated TVD {distance:.4f} at {drops} drops")
         if distance < best_tvd:
             best_tvd = distance
             out.design, out.objective, out.predicted = design, objective, predicted

@@ -24,9 +24,9 @@ FORMATS = ("svg", "pdf", "png")
 
 def size_note(design: Design) -> str:
     """What ``size_mm`` measures on this design."""
-    if design.family == "gem":
-        return "size = girdle short side, 2 model units along z"
-    return "size = longest side of the bounding box"
+    from ..families import family
+
+    return f"size = {family(design.family).reference}"
 
 
 def parse_formats(spec: str) -> tuple[str, ...]:

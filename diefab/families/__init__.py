@@ -36,8 +36,9 @@ __all__ = [
     "gem_vertices",
 ]
 
-CONVEX = Family("convex", (), "any convex polyhedron given by its vertices")
-MESH = Family("mesh", (), "a convex mesh file (OBJ, STL, PLY)")
+CONVEX = Family("convex", (), "any convex polyhedron given by its vertices",
+                reference="longest side of the bounding box")  # fmt: skip
+MESH = Family("mesh", (), "a convex mesh file (OBJ, STL, PLY)", reference="longest side of the bounding box")
 
 _FAMILIES = {f.name: f for f in (GEM, NGEM, PRISM, BIPYRAMID, TRAPEZOHEDRON, CUBOID, FREEFORM, CONVEX, MESH)}
 

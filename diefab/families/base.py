@@ -83,7 +83,7 @@ class Family:
     parameters: tuple[Parameter, ...]
     description: str
     build: Callable[[Mapping[str, float]], Polyhedron] | None = None
-    reference: str = "the largest side of the bounding box"
+    reference: str = "longest side of the bounding box"
     reference_length: Callable[[Polyhedron], float] | None = None
     readability: str = "the value on the face that points up; the value at the vertex that points up when one does"
     free: Callable[[Family, Mapping[str, float]], list[str]] = _all_parameters
