@@ -73,3 +73,26 @@ def test_design_command_refuses_bad_input_in_one_line(args, message, tmp_path, c
     assert exit_.value.code == 2
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize(
+    ("family", "params", "target"),
+    [
+        ("ngem", {"n": 5, "a": 1.3, "b": 0.6, "c": 0.5, "d": 1.5}, "2d6"),
+        ("prism", {"n": 5, "l": 1.5, "k": 1.0}, "binomial:4"),
+        ("bipyramid", {"n": 4, "h": 1.2, "g": 1.0}, "1:1,2:1"),
+        ("trapezohedron", {"n": 5, "t": 0.7, "u": 0.8}, "1:1,2:1"),
+        ("cuboid", {"x": 1.0, "z": 0.9, "t": 0.1}, "1:3,2:3,3:3,4:3,5:3,6:5"),
+        ("freeform", {"n": 8}, "uniform:4"),
+    ],
+)
+def test_optimize_works_for_every_family_with_parameters(family, params, target):
+    from diefab.optimize import optimize_design
+    from diefab.synthesis import Candidate, _start
+
+    start = _start(Candidate(family, params, 0), parse_target(target), "x", load_design("d6").fill, 30.0)
+    before = np.abs(value_probabilities(start) - start.target_distribution.aligned(start.support)).sum()
+    result = optimize_design(start, starts=0, max_evaluations=80, seed=0)
+    after = np.abs(result.values - start.target_distribution.aligned(start.support)).sum()
+    assert after <= before + 1e-12 or before > 1  # never worse than a feasible start
+    assert result.min_margin >= 0.05 and set(result.design.params) >= {n for n in params if n != "n"} - {"k"}

@@ -26,7 +26,8 @@ def _slug(text: str) -> str:
 @click.option("--model", type=click.Choice(["fast", "solid-angle", "basins", "simulation"]), default="simulation",
               show_default=True,
               help="Model optimized; simulation refines the fast model's die against pybullet drops.")  # fmt: skip
-@click.option("--budget", type=float, default=8.0, show_default=True, help="Wall-time budget of the search, minutes.")
+@click.option("--budget", type=float, default=6.0, show_default=True,
+              help="Wall-time budget of the search, minutes (the closing check comes on top).")  # fmt: skip
 @click.option("--name", default=None, help="Design name (default FAMILY-TARGET).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of starts and drops.")
 @click.option("--size", "size_mm", type=float, default=30.0, show_default=True,
