@@ -41,7 +41,7 @@ __all__ = ["Candidate", "Synthesis", "candidates", "synthesize"]
 #: Model used to rank candidates and to start the simulation refinement.
 RANK_MODEL = "fast"
 #: Drops per simulation of a refinement step (half at the first).
-REFINE_DROPS = 20_000
+REFINE_DROPS = 16_000
 #: Most refinement steps.
 REFINE_STEPS = 6
 #: Refinement stops once the simulated TVD is below this.
@@ -219,7 +219,7 @@ def synthesize(
     if final_model not in MODELS:
         raise DesignError(f"model {model!r} is not available (models: {', '.join([*MODELS, 'simulation'])})")
     pool = candidates(target, faces, family)
-    rank_share = {"simulation": 0.3, "solid-angle": 1.0}.get(model, 0.6) * budget_seconds
+    rank_share = {"simulation": 0.2, "solid-angle": 1.0}.get(model, 0.6) * budget_seconds
     best, tried = None, []
     for i, cand in enumerate(pool):
         deadline = t0 + rank_share * (i + 1) / len(pool)
@@ -238,7 +238,7 @@ def synthesize(
     if best is None or best.objective >= INFEASIBLE:
         raise DesignError(f"no stable, readable die found for target {target.spec!r} (tried {len(tried)} dice)")
     if final_model != "solid-angle":
-        polish = t0 + (rank_share + (0.15 if model == "simulation" else 0.4) * budget_seconds)
+        polish = t0 + (rank_share + (0.1 if model == "simulation" else 0.4) * budget_seconds)
         try:
             again = optimize_design(best.design, model=final_model, min_margin=min_margin, starts=1, seed=seed,
                                     name=name, deadline=polish)  # fmt: skip
