@@ -28,7 +28,7 @@ import numpy as np
 
 from .errors import DesignError, GeometryError
 from .families import family
-from .geometry import Polyhedron, face_margins, resting_faces, up_faces
+from .geometry import Polyhedron, face_margins, resting_faces
 from .mass import Fill, MassProperties, mass_properties
 from .targets import Target, parse_target
 
@@ -206,9 +206,25 @@ class Design:
 
     @cached_property
     def label_face(self) -> dict[str, str | None]:
-        """Resting face -> the face pointing up that shows its value (None: a vertex or edge is up)."""
+        """Resting face -> the face pointing up that shows its value (None: a vertex or edge is up).
+
+        What points up follows :func:`diefab.readings.readings`.
+        """
+        from .readings import readings
+
         poly = self.polyhedron
-        return {poly.names[k]: (None if up is None else poly.names[up]) for k, up in enumerate(up_faces(poly))}
+        return {
+            poly.names[k]: (poly.names[r.face] if r is not None and r.kind == "face" else None)
+            for k, r in enumerate(readings(poly))
+        }
+
+    @cached_property
+    def markings(self) -> list:
+        """Every text net and stl print, as :class:`diefab.readings.Marking` (face, text, corner or edge)."""
+        from .readings import markings
+
+        signed = min(self.support) < 0
+        return markings(self.polyhedron, self.values, {n: format_value(v, signed) for n, v in self.values.items()})
 
     @cached_property
     def label_of(self) -> dict[str, str]:
