@@ -40,6 +40,8 @@ __all__ = ["Candidate", "Synthesis", "candidates", "synthesize"]
 
 #: Model used to rank candidates and to start the simulation refinement.
 RANK_MODEL = "fast"
+#: Candidates whose objectives agree to this many decimals rank by how they are read, then by face count.
+RANK_DECIMALS = 4
 #: Drops per simulation of a refinement step (half at the first).
 REFINE_DROPS = 16_000
 #: Most refinement steps.
@@ -193,8 +195,10 @@ def synthesize(
     """Design a die for `target`.
 
     Every candidate (:func:`candidates`) is optimized under the solid-angle
-    model, which is cheap, in an equal share of the time; the best is then
-    optimized under `model`.
+    model, which is cheap, in an equal share of the time; the best (by
+    objective to :data:`RANK_DECIMALS` decimals, then by fewest faces read at
+    a vertex or edge, which net and stl do not print yet, then by fewest
+    faces) is then optimized under `model`.
 
     Parameters
     ----------
@@ -220,7 +224,7 @@ def synthesize(
         raise DesignError(f"model {model!r} is not available (models: {', '.join([*MODELS, 'simulation'])})")
     pool = candidates(target, faces, family)
     rank_share = {"simulation": 0.2, "solid-angle": 1.0}.get(model, 0.6) * budget_seconds
-    best, tried = None, []
+    best, best_key, tried = None, None, []
     for i, cand in enumerate(pool):
         deadline = t0 + rank_share * (i + 1) / len(pool)
         try:
@@ -231,10 +235,12 @@ def synthesize(
             tried.append({"family": cand.family, "faces": cand.faces, "objective": None, "error": str(exc)})
             say(f"{cand.family} ({cand.faces} faces): {exc}")
             continue
-        tried.append({"family": cand.family, "faces": cand.faces, "objective": result.objective})
+        key = (round(result.objective, RANK_DECIMALS), _not_on_faces(result.design))
+        tried.append({"family": cand.family, "faces": cand.faces, "objective": result.objective,
+                      "read_off_faces": key[1]})  # fmt: skip
         say(f"{cand.family} ({cand.faces} faces): Eq. (2) {result.objective:.5f} under the solid-angle model")
-        if best is None or result.objective < best.objective - 1e-6:
-            best = result
+        if best is None or key < best_key:
+            best, best_key = result, key
     if best is None or best.objective >= INFEASIBLE:
         raise DesignError(f"no stable, readable die found for target {target.spec!r} (tried {len(tried)} dice)")
     if final_model != "solid-angle":
@@ -250,6 +256,18 @@ def synthesize(
     if model == "simulation":
         _refine(out, target, t0 + budget_seconds, seed, min_margin, workers, say)
     return out
+
+
+def _not_on_faces(design: Design) -> int:
+    """How many resting faces are read at a vertex or edge rather than on a face (the gem's apex excepted)."""
+    from .readings import readings
+
+    found = readings(design.polyhedron)
+    apex = design.family in ("gem", "ngem")
+    k = [design.polyhedron.face_index(n) for n in design.values]
+    return sum(
+        1 for i in k if found[i] is None or (found[i].kind != "face" and not (apex and found[i].kind == "vertex"))
+    )
 
 
 def _refine(out: Synthesis, target: Target, deadline: float, seed: int, min_margin: float, workers, say) -> None:
