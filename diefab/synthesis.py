@@ -88,6 +88,11 @@ def candidates(target: Target, faces: int | None = None, family: str | None = No
         If nothing fits.
     """
     k = len(target.values)
+    if k < 2:
+        raise DesignError(f"target {target.spec!r} has one value: any die rolls it; give at least two")
+    if np.any(target.probabilities <= 0):
+        v = int(target.values[np.argmax(target.probabilities <= 0)])
+        raise DesignError(f"target {target.spec!r} gives value {v} probability 0: no face can carry it, leave it out")
     asym = {} if _symmetric(target) else {"sx": 0.1, "sz": 0.05}
     found: list[Candidate] = []
     first = max(3, ceil((k - 1) / 2))
@@ -119,9 +124,9 @@ def candidates(target: Target, faces: int | None = None, family: str | None = No
         if faces < k:
             raise DesignError(f"--faces {faces} is fewer than the target's {k} values")
     if not found:
+        what = f"family {family}" if family else "family"
         raise DesignError(
-            f"no family{' ' + family if family else ''} with{'' if faces is None else f' {faces}'} faces "
-            f"fits the {k} values of target {target.spec!r}"
+            f"no {what}{'' if faces is None else f' with {faces} faces'} fits the {k} values of target {target.spec!r}"
         )
     return sorted(found, key=lambda c: c.faces)
 

@@ -65,6 +65,9 @@ def test_design_command_writes_a_design_that_loads(tmp_path, capsys):
         (["2d6", "--family", "sphere"], "unknown family"),
         (["2d6", "--budget", "-1"], "budget"),
         (["2d6", "--name", "../x"], "name"),
+        (["1:0,2:1,3:1"], "probability 0"),
+        (["1:1"], "one value"),
+        (["2d6", "--family", "cuboid"], "no family cuboid fits"),
     ],
 )
 def test_design_command_refuses_bad_input_in_one_line(args, message, tmp_path, capsys):
