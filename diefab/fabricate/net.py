@@ -29,6 +29,21 @@ def size_note(design: Design) -> str:
     return f"size = {family(design.family).reference}"
 
 
+def corner_labels(design: Design) -> list[tuple[str, str, tuple[int, ...]]]:
+    """Values read at a vertex or an edge that points up: (face, text, vertices) for every face around it.
+
+    A die the readings cannot read gets none (its face labels are still printed).  A hand-set label
+    on the face a value would sit on (``[labels]``) replaces it: the paper's gem keeps its apex blank.
+    """
+    from ..errors import DesignError
+
+    try:
+        marks = design.markings
+    except DesignError:
+        return []
+    return [(m.face, m.text, m.at) for m in marks if m.at and m.face not in design.labels]
+
+
 def parse_formats(spec: str) -> tuple[str, ...]:
     """``"svg,pdf"`` -> ``("svg", "pdf")``; unknown names raise FabricationError."""
     items = tuple(dict.fromkeys(s.strip().lower() for s in str(spec).split(",") if s.strip()))
@@ -59,7 +74,7 @@ def render_net(design: Design, net: Net, formats=("svg", "pdf"), *, face_names: 
     size = net.mm_per_unit * design.size_mm / design.mm_per_unit
     sheets = layout_sheets(
         net, name=design.name, size_mm=round(size, 3), size_note=size_note(design), labels=design.label_of,
-        face_names=face_names,
+        face_names=face_names, corners=corner_labels(design),
     )  # fmt: skip
     out: dict[str, bytes] = {}
     for fmt in formats:

@@ -50,7 +50,7 @@ class Text:
     y: float
     size: float
     text: str
-    kind: str  # face, name, tab, edge, info
+    kind: str  # face, corner, name, tab, edge, info
     underline: bool = False
     anchor: str = "middle"
 
@@ -126,7 +126,8 @@ def _fit_text(region, text: str, max_size: float, extra=None):
     return None
 
 
-def layout_sheets(net: Net, *, name: str, size_mm: float, size_note: str, labels: dict[str, str], face_names=False):
+def layout_sheets(net: Net, *, name: str, size_mm: float, size_note: str, labels: dict[str, str], face_names=False,
+                  corners=()):  # fmt: skip
     """One :class:`Sheet` per page of `net`.
 
     Parameters
@@ -135,6 +136,9 @@ def layout_sheets(net: Net, *, name: str, size_mm: float, size_note: str, labels
     size_mm : the die's size; size_note says what it measures.
     labels : face name -> text printed on it (``Design.label_of``).
     face_names : print the small face names (f1, f2, ...) too.
+    corners : (face name, text, vertices) triples: text in a face's corner at
+        one vertex, or beside one edge (two vertices), for values read at a
+        vertex or an edge that points up (:attr:`Design.markings`).
     """
     from shapely.geometry import Polygon, box
 
@@ -176,6 +180,23 @@ def layout_sheets(net: Net, *, name: str, size_mm: float, size_note: str, labels
         fit = _fit_text(region, t.label, EDGE_TEXT)
         if fit:
             sheets[t.page].texts.append(Text(fit[1], fit[2], fit[0], t.label, "tab"))
+
+    # values read at a vertex or an edge: small text in that corner or beside that edge
+    names_index = {n: k for k, n in enumerate(names)}
+    for face, text, at in corners:
+        k = names_index[face]
+        ring = [int(v) for v in net.poly.faces[k]]
+        poly = net.faces[k]
+        anchor = np.mean([poly[ring.index(v)] for v in at], axis=0)
+        centroid = poly.mean(axis=0)
+        reach = float(np.hypot(*(centroid - anchor)))
+        size = min(MAX_FACE_TEXT / 3, 0.35 * reach)
+        at_xy = anchor + (centroid - anchor) * (0.45 if len(at) == 1 else 0.35)
+        w, h = text_width(text, size), CAP * size
+        sheets[net.face_page[k]].texts.append(
+            Text(float(at_xy[0]), float(at_xy[1]), size, text, "corner", needs_underline(text))
+        )
+        occupied[k].append(_box(at_xy[0], at_xy[1], w + 0.6, h + 0.6))
 
     # face labels
     for k, poly in enumerate(net.faces):
