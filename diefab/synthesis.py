@@ -44,6 +44,8 @@ RANK_MODEL = "fast"
 RANK_DECIMALS = 4
 #: Drops per simulation of a refinement step (half at the first).
 REFINE_DROPS = 16_000
+#: Shortest re-optimization of a refinement step, seconds.
+MIN_STEP_SECONDS = 10.0
 #: Most refinement steps.
 REFINE_STEPS = 6
 #: Refinement stops once the simulated TVD is below this.
@@ -302,8 +304,10 @@ def _refine(out: Synthesis, target: Target, deadline: float, seed: int, min_marg
         center = design.mass_properties().center
         correction = sim.face_probabilities - MODELS[RANK_MODEL](design.polyhedron, center)
         try:
+            # leave time for the next simulation, which judges this step
+            stop = max(time.monotonic() + MIN_STEP_SECONDS, deadline - per_drop * REFINE_DROPS)
             result = optimize_design(design, model=RANK_MODEL, min_margin=min_margin, starts=0, seed=seed,
-                                     name=design.name, correction=correction)  # fmt: skip
+                                     name=design.name, correction=correction, deadline=stop)  # fmt: skip
         except DesignError:
             break
         design = replace(result.design, description=design.description)
