@@ -40,6 +40,7 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=424242)
     parser.add_argument("--budget", type=float, default=None, help="design --budget (default: the command's)")
     parser.add_argument("--out", type=Path, default=None, help="keep the designs here (default: a temp folder)")
+    parser.add_argument("--results", type=Path, default=HERE / "results" / "design.json", help="JSON rows")
     args = parser.parse_args()
     targets = [t for t in args.targets.split(";") if t]
     out = args.out or Path(tempfile.mkdtemp(prefix="bench-design-"))
@@ -54,6 +55,7 @@ def main() -> int:
         if proc.returncode != 0:
             print(f"{target:26s} design failed: {proc.stderr.strip()}", flush=True)
             rows.append({"target": target, "error": proc.stderr.strip(), "design_seconds": seconds})
+            _save(rows, args.results)
             continue
         report = json.loads(proc.stdout)
         path = report["design_file"]
@@ -74,12 +76,18 @@ def main() -> int:
             "params": report["params"], "values": report["values"], "design_file": path,
         }  # fmt: skip
         rows.append(row)
+        _save(rows, args.results)
         print(f"{target:26s} {row['family']:10s} {row['faces']:5d} {seconds:9.0f} {baseline:13.4f} "
               f"{row['tvd']:7.4f} {row['p_value']:8.3g} {'ok' if row['net_ok'] else 'FAIL':>4s} "
               f"{'ok' if row['stl_ok'] else 'FAIL':>4s}", flush=True)  # fmt: skip
-    (HERE / "results").mkdir(exist_ok=True)
-    (HERE / "results" / "design.json").write_text(json.dumps(rows, indent=2) + "\n")
+    _save(rows, args.results)
     return 0
+
+
+def _save(rows: list[dict], path: Path) -> None:
+    """Write the rows so far (an interrupted run keeps the targets it finished)."""
+    path.parent.mkdir(exist_ok=True)
+    path.write_text(json.dumps(rows, indent=2) + "\n")
 
 
 if __name__ == "__main__":
