@@ -8,8 +8,8 @@ For each target (default: 2d6, 3dF, binomial:4, the loaded d6
 --sims drops on --seed (a seed the design step never used; solid fill),
 and runs ``diefab net`` and ``diefab stl`` on it.  The baseline in the same
 run is the die the fast model alone designs (the design step's first
-simulation, 10,000 drops, before any correction by simulation).  Prints one
-row per target and writes benchmarks/results/design.json.
+simulation, 8,000 drops, before any correction by simulation).  Prints one
+row per target and writes the rows so far to --results after each.
 """
 
 from __future__ import annotations
