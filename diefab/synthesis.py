@@ -40,8 +40,9 @@ __all__ = ["Candidate", "Synthesis", "candidates", "synthesize"]
 
 #: Model used to rank candidates and to start the simulation refinement.
 RANK_MODEL = "fast"
-#: Candidates whose objectives agree to this many decimals rank by how they are read, then by face count.
-RANK_DECIMALS = 4
+#: Candidates whose objectives agree to this many decimals rank by how they are read, then by how many
+#: transitional faces they have (the fast model is least sure of them), then by face count.
+RANK_DECIMALS = 3
 #: Drops per simulation of a refinement step (half at the first).
 REFINE_DROPS = 16_000
 #: Shortest re-optimization of a refinement step, seconds.
@@ -204,7 +205,7 @@ def synthesize(
     Every candidate (:func:`candidates`) is optimized under the solid-angle
     model, which is cheap, in an equal share of the time; the best (by
     objective to :data:`RANK_DECIMALS` decimals, then by fewest faces read at
-    a vertex or edge, which net and stl do not print yet, then by fewest
+    a vertex or edge, then by fewest transitional faces, then by fewest
     faces) is then optimized under `model`.
 
     Parameters
@@ -242,7 +243,8 @@ def synthesize(
             tried.append({"family": cand.family, "faces": cand.faces, "objective": None, "error": str(exc)})
             say(f"{cand.family} ({cand.faces} faces): {exc}")
             continue
-        key = (round(result.objective, RANK_DECIMALS), _not_on_faces(result.design))
+        key = (round(result.objective, RANK_DECIMALS), _not_on_faces(result.design),
+               len(result.design.transitional_faces))  # fmt: skip
         tried.append({"family": cand.family, "faces": cand.faces, "objective": result.objective,
                       "read_off_faces": key[1]})  # fmt: skip
         say(f"{cand.family} ({cand.faces} faces): Eq. (2) {result.objective:.5f} under the solid-angle model")
