@@ -79,9 +79,13 @@ class Design:
     labels : mapping str -> str
         Overrides of the computed label text, keyed by the face that carries it.
     size_mm : float
-        Physical size of the family's reference length (the gem's girdle
-        short side; for ``convex``/``mesh`` the largest side of the bounding
-        box; see each family's ``reference``).
+        Physical size as dice makers measure it (:attr:`size_note`): the
+        gem's girdle short side (2 model units along its z); for the other
+        families their stated reference length (``Family.reference``); for
+        ``convex``, ``mesh`` and ``freeform`` dice, face to face when every
+        face has a parallel opposite (a d6, d8, d20: the widest such pair),
+        else the largest distance between two vertices (a d4's edge).  It
+        never depends on how the vertices are rotated.
     fill : Fill
     physics : mapping
         Simulation settings stored with the design (see :mod:`diefab.physics`).
@@ -202,7 +206,12 @@ class Design:
     @cached_property
     def mm_per_unit(self) -> float:
         """Millimetres per model unit."""
-        return self.size_mm / family(self.family).length(self.polyhedron)
+        return self.size_mm / reference_length(self)[0]
+
+    @property
+    def size_note(self) -> str:
+        """What ``size_mm`` measures on this die, in words."""
+        return reference_length(self)[1]
 
     @cached_property
     def label_face(self) -> dict[str, str | None]:
@@ -287,6 +296,18 @@ class Design:
         return replace(self, target=target)
 
 
+def reference_length(design: Design) -> tuple[float, str]:
+    """The length ``size_mm`` measures, model units, and its name.
+
+    >>> reference_length(load_design("d6"))
+    (2.0, 'face to face')
+    """
+    if design.family == "gem":
+        return 2.0, "girdle short side"
+    fam = family(design.family)
+    return fam.length(design.polyhedron), fam.reference_name(design.polyhedron)
+
+
 # ----------------------------------------------------------------------
 # templates and TOML
 
@@ -356,6 +377,12 @@ def parse_design(content: str, *, source: str = "<string>", base: Path | None = 
         kwargs["faces"] = tuple(tuple(f) for f in data["faces"])
     if "mesh" in data:
         kwargs["mesh"] = (base or Path.cwd()) / data["mesh"]
+    if isinstance(data.get("labels"), dict) and base is not None:
+        # an SVG symbol's file is found beside the design file, as a mesh is
+        kwargs["labels"] = {
+            face: f"svg:{base / text[4:].strip()}" if isinstance(text, str) and text.startswith("svg:") else text
+            for face, text in data["labels"].items()
+        }
     if "transitional" in data:
         if not isinstance(data["transitional"], list):
             raise DesignError(f"{source}: transitional must be a list of face names")

@@ -101,18 +101,3 @@ def test_equal_target_values_go_to_faces_of_one_symmetry_class():
 def test_too_few_faces_is_a_design_error():
     with pytest.raises(DesignError, match="cannot carry"):
         assign_values([0.5, 0.5], ["f1", "f2"], parse_target("uniform:3"))
-
-
-def test_a_d4_net_prints_each_value_in_the_three_corners_at_its_vertex():
-    import xml.etree.ElementTree as ET
-
-    from diefab.design import Design
-    from diefab.fabricate.net import design_net, render_net
-
-    t = [[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]]
-    d4 = Design("d4", "convex", vertices=tuple(map(tuple, t)), values={f"f{k}": k for k in range(1, 5)},
-                target="uniform:4", size_mm=20.0)  # fmt: skip
-    assert d4.label_of == {}  # no face points up: nothing in the middle of a face
-    svg = render_net(d4, design_net(d4), formats=("svg",))["svg"]
-    corners = [e.text for e in ET.fromstring(svg).iter() if e.get("class") == "corner"]
-    assert sorted(corners) == sorted([str(k) for k in range(1, 5)] * 3)

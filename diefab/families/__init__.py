@@ -36,9 +36,8 @@ __all__ = [
     "gem_vertices",
 ]
 
-CONVEX = Family("convex", (), "any convex polyhedron given by its vertices",
-                reference="longest side of the bounding box")  # fmt: skip
-MESH = Family("mesh", (), "a convex mesh file (OBJ, STL, PLY)", reference="longest side of the bounding box")
+CONVEX = Family("convex", (), "any convex polyhedron given by its vertices")
+MESH = Family("mesh", (), "a convex mesh file (OBJ, STL, PLY)")
 
 _FAMILIES = {f.name: f for f in (GEM, NGEM, PRISM, BIPYRAMID, TRAPEZOHEDRON, CUBOID, FREEFORM, CONVEX, MESH)}
 

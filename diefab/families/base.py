@@ -70,8 +70,8 @@ class Family:
     reference : str
         What ``size_mm`` measures on the die.
     reference_length : callable, optional
-        Polyhedron -> that length in model units (default: the largest side
-        of the bounding box).
+        Polyhedron -> that length in model units (default:
+        :func:`default_length`, the rule for ``convex`` and ``mesh`` dice).
     readability : str
         How each resting face is read on the finished die.
     free : callable, optional
@@ -83,7 +83,7 @@ class Family:
     parameters: tuple[Parameter, ...]
     description: str
     build: Callable[[Mapping[str, float]], Polyhedron] | None = None
-    reference: str = "longest side of the bounding box"
+    reference: str = "face to face when every face has a parallel opposite, else the largest vertex distance"
     reference_length: Callable[[Polyhedron], float] | None = None
     readability: str = "the value on the face that points up; the value at the vertex that points up when one does"
     free: Callable[[Family, Mapping[str, float]], list[str]] = _all_parameters
@@ -140,8 +140,25 @@ class Family:
     def length(self, poly: Polyhedron) -> float:
         """The reference length of `poly`, model units (``size_mm`` measures it)."""
         if self.reference_length is None:
-            return float(np.ptp(poly.vertices, axis=0).max())
+            return default_length(poly)[0]
         return float(self.reference_length(poly))
+
+    def reference_name(self, poly: Polyhedron) -> str:
+        """What :meth:`length` measures on `poly`, in words."""
+        return default_length(poly)[1] if self.reference_length is None else self.reference
+
+
+def default_length(poly: Polyhedron) -> tuple[float, str]:
+    """Face to face when every face has a parallel opposite (the widest pair), else the largest vertex distance."""
+    from scipy.spatial.distance import pdist
+
+    from .. import tolerances as tol
+
+    cos = poly.normals @ poly.normals.T
+    opposite = np.argmin(cos, axis=1)
+    if np.all(cos[np.arange(len(cos)), opposite] < -1 + tol.COPLANAR):
+        return float((poly.offsets + poly.offsets[opposite]).max()), "face to face"
+    return float(pdist(poly.vertices).max()), "largest vertex-to-vertex distance"
 
 
 def width_along(poly: Polyhedron, face: int = 0) -> float:

@@ -72,7 +72,7 @@ BIPYRAMID = Family(
     ),
     "two n-gon pyramids joined at the equator: 2n triangles",
     build=bipyramid_polyhedron,
-    reference="the width across f1's normal: face to opposite face for even n and g = h",
+    reference="width along f1's normal",
     reference_length=width_along,
     readability=_READ,
 )
@@ -88,7 +88,7 @@ TRAPEZOHEDRON = Family(
     ),
     "two rings of n kites, turned by half a step (the d10 for n = 5): 2n faces",
     build=trapezohedron_polyhedron,
-    reference="the width across f1's normal: face to opposite face for odd n and u = t",
+    reference="width along f1's normal",
     reference_length=width_along,
     readability=_READ,
 )

@@ -53,7 +53,7 @@ CUBOID = Family(
     ),
     "box with faces in opposite pairs (long dice, loaded d6 by taper)",
     build=cuboid_polyhedron,
-    reference="the distance from the bottom face f1 to the top face f2, 2 model units",
+    reference="face to face, bottom to top",
     reference_length=lambda poly: 2.0,
     readability="the value on the face that points up (its opposite face)",
     free=lambda fam, p: ["x", "z", *(["t"] if p["t"] != 0 else [])],

@@ -82,7 +82,7 @@ NGEM = Family(
     "frustum on an inverted pyramid over an n-gon girdle: 2n+1 faces; apex shifts sx, sz make it asymmetric",
     build=ngem_polyhedron,
     free=lambda fam, p: ["a", "b", "c", "d", *(["e"] if p["n"] == 4 else [])] + [s for s in ("sx", "sz") if p[s] != 0],
-    reference="girdle width across z, 2 model units (n = 4: the paper's girdle short side)",
+    reference="girdle width across z (n = 4: girdle short side)",
     reference_length=lambda poly: 2.0,
     readability=(
         "the value on the face that points up; resting on its top the gem points its apex up, "

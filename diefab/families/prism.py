@@ -66,7 +66,7 @@ PRISM = Family(
     ),
     "n-sided prism around the y axis with flat ends or pyramid caps (k); offsets h1..hn shape the cross-section",
     build=prism_polyhedron,
-    reference="the width across the lateral faces, from f1 to the opposite face (even n) or edge (odd n)",
+    reference="width across the lateral faces from f1",
     reference_length=width_along,
     readability=(
         "lateral faces: the value on the face that points up (even n) or at the top edge's vertex "
