@@ -13,7 +13,7 @@ Examples
 --------
 >>> from diefab.targets import parse_target
 >>> assign_values([0.3, 0.3, 0.2, 0.1, 0.1], ["f1", "f2", "f3", "f4", "f5"], parse_target("1:6,2:4"))
-{'f1': 1, 'f2': 1, 'f3': 2, 'f4': 2, 'f5': 2}
+{'f1': 1, 'f2': 2, 'f3': 1, 'f4': 1, 'f5': 2}
 """
 
 from __future__ import annotations

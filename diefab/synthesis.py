@@ -13,7 +13,7 @@ Examples
 --------
 >>> from diefab.targets import parse_target
 >>> [(c.family, c.faces) for c in candidates(parse_target("2d6"))][:3]
-[('ngem', 11), ('prism', 11), ('freeform', 11)]
+[('ngem', 11), ('prism', 11), ('prism', 11)]
 """
 
 from __future__ import annotations
