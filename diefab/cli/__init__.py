@@ -14,6 +14,7 @@ import sys
 import click
 
 from ..errors import DiefabError
+from .design import design
 from .net import net
 from .optimize import optimize
 from .predict import predict, templates
@@ -30,7 +31,7 @@ def cli() -> None:
     """Design, simulate and fabricate dice with unequal face probabilities."""
 
 
-for _command in (templates, predict, stats, optimize, validate, net, stl):
+for _command in (templates, predict, stats, design, optimize, validate, net, stl):
     cli.add_command(_command)
 
 
