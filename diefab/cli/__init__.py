@@ -15,6 +15,7 @@ import click
 
 from ..errors import DiefabError
 from .calibrate import calibrate
+from .design import design
 from .net import net
 from .optimize import optimize
 from .predict import predict, templates
@@ -31,7 +32,7 @@ def cli() -> None:
     """Design, simulate and fabricate dice with unequal face probabilities."""
 
 
-for _command in (templates, predict, stats, optimize, validate, calibrate, net, stl):
+for _command in (templates, predict, stats, design, optimize, validate, calibrate, net, stl):
     cli.add_command(_command)
 
 
