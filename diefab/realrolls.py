@@ -111,7 +111,7 @@ class RealRolls:
         return grouped_tvd(p, self.frequencies, self.outcomes, self.groups) + 0.5 * extra
 
     # ------------------------------------------------------------------
-    def design_files(self, merge_tolerance_mm: float = MERGE_TOLERANCE_MM) -> dict[str, str | bytes]:
+    def design_files(self, merge_tolerance_mm: float = MERGE_TOLERANCE_MM) -> dict[str, str]:
         """File name -> content: the die's design TOML.
 
         The design is in model units (the longest side of the bounding box

@@ -52,7 +52,7 @@ UNSETTLED = -2
 
 #: Raised whenever a change to this module can change a drop's outcome at given settings and seed
 #: (the fast model's benchmark keys its cached counts by it).
-OUTCOME_VERSION = 3
+OUTCOME_VERSION = 2
 #: Steps between two settle checks of the fast path (it never changes a trajectory).
 CHECK_EVERY = 32
 #: Die bodies stepped together in one world.

@@ -159,3 +159,17 @@ def _value_matrix(d: Design) -> np.ndarray:
         if name in d.values:
             m[k, d.support.index(d.values[name])] = 1
     return m
+
+
+def test_grouped_tvd_relabels_only_within_a_group():
+    from diefab.realrolls import RealRolls, grouped_tvd
+
+    q = np.array([0.1, 0.4, 0.3, 0.2])
+    swapped = q[[3, 2, 1, 0]]
+    assert grouped_tvd(swapped, q, (0, 1, 2, 3), ((0, 3), (1, 2))) == pytest.approx(0)
+    assert grouped_tvd(swapped, q, (0, 1, 2, 3), ((0, 3),)) == pytest.approx(0.1)
+    rolls = RealRolls(name="d3", outcomes=(1, 2, 3), counts=np.array([100, 100, 100]), groups=((1, 2),))
+    assert rolls.tvd({1: 0.5, 2: 0.25, 3: 0.25}) == pytest.approx(1 / 6)
+    assert rolls.tvd({1: 1 / 3, 2: 1 / 3, 3: 0.3, 0: 1 / 30}) == pytest.approx(1 / 30)  # mass on no outcome
+    # sampling noise: about sqrt((K - 1) / (2 pi N)) for K outcomes and N rolls
+    assert 0.8 < rolls.noise_tvd(samples=4000) / np.sqrt(2 / (2 * np.pi * 300)) < 1.2
