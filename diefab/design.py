@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from . import tolerances as tol
 from .errors import DesignError, GeometryError
 from .families import family, gem_polyhedron
 from .geometry import Polyhedron, face_margins, resting_faces, up_faces
@@ -88,9 +89,12 @@ class Design:
     labels : mapping str -> str
         Overrides of the computed label text, keyed by the face that carries it.
     size_mm : float
-        Physical size: the length that measures 2 model units along z (the
-        gem's girdle short side; for ``convex``/``mesh`` the largest side of
-        the bounding box).
+        Physical size as dice makers measure it (:attr:`size_note`): the
+        gem's girdle short side (2 model units along its z); for ``convex``
+        and ``mesh`` dice, face to face when every face has a parallel
+        opposite (a d6, d8, d20: the widest such pair), else the largest
+        distance between two vertices (a d4's edge).  It never depends on
+        how the vertices are rotated.
     fill : Fill
     physics : mapping
         Simulation settings stored with the design (see :mod:`diefab.physics`).
@@ -229,21 +233,26 @@ class Design:
         if self.family == "gem":
             return gem_polyhedron(self.params)
         try:
-            if self.family == "convex":
-                if self.faces is None:
-                    return Polyhedron.from_points(self.vertices, merge_tolerance=self._merge_tolerance)
+            if self.family == "convex" and self.faces is not None:
                 return Polyhedron(np.array(self.vertices, dtype=float), self.faces)
-            return Polyhedron.from_points(self.body_mesh.vertices, strict=False, merge_tolerance=self._merge_tolerance)
+            mm = MESH_MERGE_MM if self.merge_tolerance_mm is None and self.family == "mesh" else self.merge_tolerance_mm
+            mesh = self.family == "mesh"
+            points = self.body_mesh.vertices if mesh else np.array(self.vertices, dtype=float)
+            if mm is None:
+                return Polyhedron.from_points(points, strict=not mesh)
+            # the tolerance is in mm, and what size_mm measures depends on the merged faces: start from the
+            # largest vertex distance and merge again if the faces say the die is measured face to face
+            from scipy.spatial import ConvexHull
+            from scipy.spatial.distance import pdist
+
+            length = float(pdist(points[ConvexHull(points).vertices]).max())
+            poly = Polyhedron.from_points(points, strict=not mesh, merge_tolerance=mm * length / self.size_mm)
+            ref = _reference_of(poly)[0]
+            if abs(ref - length) > 1e-6 * length:
+                poly = Polyhedron.from_points(points, strict=not mesh, merge_tolerance=mm * ref / self.size_mm)
+            return poly
         except GeometryError as exc:
             raise DesignError(f"design {self.name!r}: {exc}") from exc
-
-    @property
-    def _merge_tolerance(self) -> float | None:
-        """The merge tolerance in model units (None: exact coplanarity)."""
-        mm = self.merge_tolerance_mm
-        if mm is None and self.family == "mesh":
-            mm = MESH_MERGE_MM
-        return None if mm is None else mm / self.mm_per_unit
 
     @cached_property
     def transitional_faces(self) -> tuple[str, ...]:
@@ -286,10 +295,12 @@ class Design:
     @cached_property
     def mm_per_unit(self) -> float:
         """Millimetres per model unit."""
-        if self.family == "gem":
-            return self.size_mm / 2.0
-        points = self.body_mesh.vertices if self.family == "mesh" else np.array(self.vertices, dtype=float)
-        return self.size_mm / float(np.ptp(points, axis=0).max())
+        return self.size_mm / reference_length(self)[0]
+
+    @property
+    def size_note(self) -> str:
+        """What ``size_mm`` measures on this die, in words."""
+        return reference_length(self)[1]
 
     @cached_property
     def label_face(self) -> dict[str, str | None]:
@@ -387,6 +398,28 @@ class Design:
         return replace(self, target=target)
 
 
+def reference_length(design: Design) -> tuple[float, str]:
+    """The length ``size_mm`` measures, model units, and its name.
+
+    >>> reference_length(load_design("d6"))
+    (2.0, 'face to face')
+    """
+    if design.family == "gem":
+        return 2.0, "girdle short side"
+    return _reference_of(design.polyhedron)
+
+
+def _reference_of(poly: Polyhedron) -> tuple[float, str]:
+    """:func:`reference_length` of a die that is not a gem."""
+    cos = poly.normals @ poly.normals.T
+    opposite = np.argmin(cos, axis=1)
+    if np.all(cos[np.arange(len(cos)), opposite] < -1 + tol.COPLANAR):
+        return float((poly.offsets + poly.offsets[opposite]).max()), "face to face"
+    from scipy.spatial.distance import pdist
+
+    return float(pdist(poly.vertices).max()), "largest vertex-to-vertex distance"
+
+
 # ----------------------------------------------------------------------
 # templates and TOML
 
@@ -459,6 +492,12 @@ def parse_design(content: str, *, source: str = "<string>", base: Path | None = 
     for key in ("center_of_mass", "inertia", "merge_tolerance_mm"):
         if key in data:
             kwargs[key] = data[key]
+    if isinstance(data.get("labels"), dict) and base is not None:
+        # an SVG symbol's file is found beside the design file, as a mesh is
+        kwargs["labels"] = {
+            face: f"svg:{base / text[4:].strip()}" if isinstance(text, str) and text.startswith("svg:") else text
+            for face, text in data["labels"].items()
+        }
     if "transitional" in data:
         if not isinstance(data["transitional"], list):
             raise DesignError(f"{source}: transitional must be a list of face names")

@@ -115,21 +115,21 @@ class RealRolls:
         """File name -> content: the die's design TOML.
 
         The design is in model units (the longest side of the bounding box
-        is 2 units, ``size_mm`` the real length), its values are the
+        is 2 units, ``size_mm`` the real length it stands for), its values are the
         outcomes, its target the die's designed distribution (Binomial or
         uniform, from the name).
         """
         from dataclasses import replace
 
-        from .design import Design, design_to_toml
+        from .design import Design, _reference_of, design_to_toml
         from .geometry import Polyhedron, resting_faces
 
         if self.hull_vertices is None:
             raise DesignError(f"real die {self.name!r} has no geometry")
-        size_mm = float(np.ptp(self.hull_vertices, axis=0).max())
-        scale = 2.0 / size_mm
+        scale = 2.0 / float(np.ptp(self.hull_vertices, axis=0).max())  # model units per mm
         vertices = self.hull_vertices * scale
         poly = Polyhedron.from_points(vertices, strict=False, merge_tolerance=merge_tolerance_mm * scale)
+        size_mm = _reference_of(poly)[0] / scale  # the real length of what size_mm measures
         body = {}
         if self.center_of_mass is not None:
             body["center_of_mass"] = tuple((self.center_of_mass * scale).tolist())
