@@ -30,7 +30,7 @@ from typing import Literal
 import numpy as np
 
 from . import tolerances as tol
-from .errors import DesignError
+from .errors import DesignError, GeometryError
 from .geometry import Polyhedron, _cross
 from .meshes import ClosedMesh
 
@@ -136,9 +136,12 @@ def inset(poly: Polyhedron, distance: float) -> Polyhedron | None:
         hs = HalfspaceIntersection(np.column_stack([normals, -offsets]), res.x[:3])
     except QhullError:
         return None
-    # planes of many small faces meet in near-duplicate corners: merge within a sliver of the die's size
-    scale = max(1.0, float(np.ptp(poly.vertices, axis=0).max()))
-    return Polyhedron.from_points(hs.intersections, strict=False, merge_tolerance=tol.INSET_MERGE * scale)
+    try:
+        return Polyhedron.from_points(hs.intersections, strict=False)
+    except GeometryError:
+        # planes of many small faces meet in near-duplicate corners: merge within a sliver of the die's size
+        scale = max(1.0, float(np.ptp(poly.vertices, axis=0).max()))
+        return Polyhedron.from_points(hs.intersections, strict=False, merge_tolerance=tol.INSET_MERGE * scale)
 
 
 def mass_properties(poly: Polyhedron, fill: Fill | None = None, *, mm_per_unit: float = 1.0) -> MassProperties:
