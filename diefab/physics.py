@@ -104,17 +104,22 @@ class PhysicsSettings:
     still_speed, still_spin : float
         A die is still when its speed (units/s) and spin (rad/s) are below these.
     settle_time : float
-        A die still this long (s) with a face within ``face_tolerance`` of
-        straight down has landed on that face.
+        Without the energy rule (``energy_fraction`` 0), a die still this
+        long (s) on a face it can rest on, within ``face_tolerance`` of
+        straight down, has landed on that face.  With it, a die has landed
+        when it can no longer leave its face (see ``energy_fraction``) or
+        has been still on it for ``cocked_time``: a short still window
+        counts a die toppling slowly off a face as resting on it.
     cocked_time : float
         A die still this long (s) with no face down is cocked (a die
         momentarily balanced on an edge can be still for a short while).
     energy_fraction : float
-        Fast-path early stop: a die whose orientation lies in face f's basin
+        The landing rule: a die whose orientation lies in face f's basin
         (:class:`diefab.geometry.RestBasins`) has landed on f once its kinetic
         energy plus potential energy above rest on f is below this fraction
-        of the basin's barrier (its lowest saddle); 0 turns the early stop
-        off.  The rest is a margin for the engine's energy errors.  In [0, 1).
+        of the basin's barrier (its lowest saddle): it can no longer leave
+        f.  0 turns the rule off (``settle_time`` then decides).  The rest
+        is a margin for the engine's energy errors.  In [0, 1).
     time_limit : float
         A die still moving after this many seconds is unsettled.
     face_tolerance : float
@@ -214,7 +219,7 @@ class RollResult:
         Drops that came to rest on each face.
     cocked, unsettled : int
         Drops at rest on no face / still moving at the time limit.
-    outcomes : (n,) int8
+    outcomes : (n,) int32
         Per drop: the face index, -1 cocked or -2 unsettled (drop *i* is
         the same for the same seed whatever the workers).
     seconds : float
@@ -500,7 +505,7 @@ def simulate(
             f"must exceed the die's radius {body.radius:.3f} so that it starts above the ground"
         )
     n, seed = int(n), int(seed)
-    outcomes = np.empty(n, dtype=np.int8)
+    outcomes = np.empty(n, dtype=np.int32)
     batches = _batches(n, 1 if scheduler is None and workers == 1 else workers)
     done = 0
     started = time.perf_counter()

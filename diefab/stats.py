@@ -284,9 +284,8 @@ def goodness_of_fit(
     n = int(x.sum())
     if n == 0:
         raise StatsError("no rolls: all counts are zero")
-    if np.any((p == 0) & (x > 0)):
-        k = int(np.argmax((p == 0) & (x > 0)))
-        raise StatsError(f"value number {k + 1} has target probability 0 but was rolled {x[k]} times")
+    # a value the target never rolls, rolled: the target is rejected outright (p = 0 exactly)
+    impossible = bool(np.any((p == 0) & (x > 0)))
     live = p > 0
     xs, ps = x[live], p[live]
     expected = n * ps
@@ -297,6 +296,8 @@ def goodness_of_fit(
     nz = xs > 0
     g = float(2 * (xs[nz] * np.log(xs[nz] / expected[nz])).sum())
     obs = x / n
+    if impossible:
+        stat, g, p_mc = np.inf, np.inf, 0.0
     return GoodnessOfFit(
         counts=x,
         target=p,

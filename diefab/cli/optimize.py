@@ -30,7 +30,7 @@ from .common import (
     "--model",
     default="solid-angle",
     show_default=True,
-    help="Landing model to fit: solid-angle, fast, or simulation (pybullet drops).",
+    help="Landing model to fit: solid-angle, basins (quasi-static), fast, or simulation (pybullet drops).",
 )
 @click.option("--target", default=None, help="Target distribution (default: the design's).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the random starts.")

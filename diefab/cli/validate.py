@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 import click
+import numpy as np
 
 from ..design import format_value
 from .common import console, design_argument, emit_json, get_design, heading, json_option, physics_options, values_dict
@@ -68,6 +69,8 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, ta
     fit = goodness_of_fit(counts, goal, seed=seed)
     model = value_probabilities(d, "solid-angle")
     keys = [str(v) for v in d.support]
+    # values the target never rolls, rolled: counted and reported (they reject the target outright)
+    unexpected = {k: int(c) for k, c, g in zip(keys, counts, goal) if g == 0 and c > 0}
     out = {
         "design": d.name,
         "params": dict(d.params),
@@ -83,7 +86,9 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, ta
         "solid_angle": values_dict(d, model),
         "cocked": result.cocked,
         "unsettled": result.unsettled,
-        "chi2": fit.chi2,
+        "zero_weight_rolls": unexpected,
+        "transitional": list(d.transitional_faces),
+        "chi2": fit.chi2 if np.isfinite(fit.chi2) else None,
         "df": fit.df,
         "p_value": fit.p_value,
         "p_value_mc": fit.p_value_mc,
@@ -113,11 +118,16 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, ta
         table.add_row(format_value(v, signed), str(counts[k]), f"{fit.observed[k]:.4f}", f"[{lo:.4f}, {hi:.4f}]",
                       f"{goal[k]:.4f}", f"{model[k]:.4f}")  # fmt: skip
     con.print(table)
-    con.print("faces: " + "  ".join(f"{n}={c}" for n, c in zip(result.faces, result.face_counts)))
+    shown = [f"{n}={c}" for n, c in zip(result.faces, result.face_counts) if n in d.values]
+    more = f"  ... ({len(shown) - 40} more; --json lists all)" if len(shown) > 40 else ""
+    con.print("faces: " + "  ".join(shown[:40]) + more)
     con.print(
         f"{result.n} drops: {result.landed} on a face, {result.cocked} cocked, {result.unsettled} unsettled; "
         f"{result.seconds:.1f} s, {result.drops_per_second:,.0f} drops/s"
     )
+    if unexpected:
+        con.print("rolled values with target weight 0: " + "  ".join(f"{k} x{c}" for k, c in unexpected.items())
+                  + " (impossible under the target: p = 0)")  # fmt: skip
     con.print(f"chi2 = {fit.chi2:.3f} (df {fit.df}), p = {fit.p_value:.4g} (Monte-Carlo {fit.p_value_mc:.4g})")
     con.print(f"TVD = {fit.tvd:.4f} (expected under the target {fit.expected_tvd:.4f})   "
               f"JSD = {fit.jsd:.5f} (expected {fit.expected_jsd:.5f})")  # fmt: skip
