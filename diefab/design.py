@@ -30,6 +30,7 @@ from .errors import DesignError, GeometryError
 from .families import family, gem_polyhedron
 from .geometry import Polyhedron, face_margins, up_faces
 from .mass import Fill, MassProperties, mass_properties
+from .schema import check_design_data, check_mapping
 from .targets import Target, parse_target
 
 __all__ = [
@@ -101,9 +102,15 @@ class Design:
     mesh: Path | None = None
 
     def __post_init__(self) -> None:
+        for key in ("name", "family", "target", "description"):
+            if not isinstance(getattr(self, key), str):
+                raise DesignError(f"{key}={getattr(self, key)!r} must be a string")
+        for key in ("params", "values", "labels", "physics"):
+            check_mapping(key, getattr(self, key))
         fam = family(self.family)
         object.__setattr__(self, "params", fam.check_params(self.params))
-        if not (isinstance(self.size_mm, (int, float)) and math.isfinite(self.size_mm) and self.size_mm > 0):
+        size = self.size_mm
+        if isinstance(size, bool) or not (isinstance(size, (int, float)) and math.isfinite(size) and size > 0):
             raise DesignError(f"size_mm={self.size_mm} must be a positive number of millimetres")
         if self.family == "convex" and self.vertices is None:
             raise DesignError("a convex design needs 'vertices'")
@@ -274,6 +281,10 @@ def parse_design(content: str, *, source: str = "<string>", base: Path | None = 
     for key in ("name", "family"):
         if key not in data:
             raise DesignError(f"{source}: missing key {key!r}")
+    try:
+        check_design_data(data)
+    except DesignError as exc:
+        raise DesignError(f"{source}: {exc}") from None
     try:
         fill = Fill(**data.get("fill", {}))
     except TypeError as exc:

@@ -25,6 +25,8 @@ class Parameter:
     default: Callable[[Mapping[str, float]], float] | None = None
 
     def check(self, value: float) -> float:
+        if isinstance(value, (bool, str)) or not isinstance(value, (int, float, np.number)):
+            raise DesignError(f"{self.name}={value!r} is not a number")
         value = float(value)
         if not np.isfinite(value):
             raise DesignError(f"{self.name}={value} is not a finite number")
