@@ -275,16 +275,16 @@ def parse_design(content: str, *, source: str = "<string>", base: Path | None = 
         data = tomllib.loads(content)
     except tomllib.TOMLDecodeError as exc:
         raise DesignError(f"{source}: malformed TOML: {exc}") from exc
+    try:
+        check_design_data(data)
+    except DesignError as exc:
+        raise DesignError(f"{source}: {exc}") from None
     unknown = sorted(set(data) - _KEYS)
     if unknown:
         raise DesignError(f"{source}: unknown key {unknown[0]!r} (keys: {', '.join(sorted(_KEYS))})")
     for key in ("name", "family"):
         if key not in data:
             raise DesignError(f"{source}: missing key {key!r}")
-    try:
-        check_design_data(data)
-    except DesignError as exc:
-        raise DesignError(f"{source}: {exc}") from None
     try:
         fill = Fill(**data.get("fill", {}))
     except TypeError as exc:

@@ -43,15 +43,13 @@ def safe_name(name: str) -> str:
 
     Examples
     --------
-    >>> safe_name("../../etc/x"), safe_name("gem: v2"), safe_name(".hidden")
-    ('_.._etc_x', 'gem_ v2', 'hidden')
+    >>> safe_name("../../etc/x"), safe_name("gem: v2"), safe_name(".hidden"), safe_name("..")
+    ('_.._etc_x', 'gem_ v2', 'hidden', '_')
     """
     if not isinstance(name, str):
         raise OutputError(f"name {name!r} is not a string")
     text = _UNSAFE.sub("_", name).strip().lstrip(".").rstrip(". ")
-    if not text:
-        raise OutputError(f"name {name!r} leaves no usable file name")
-    return text
+    return text or "_"
 
 
 def output_path(folder: str | Path, name: str, suffix: str) -> Path:
