@@ -118,6 +118,18 @@ def table(item: Check | None = None) -> Check:
     return check
 
 
+def record(**items: Check) -> Check:
+    """A TOML table whose named keys are checked by their own checks (other keys are left to the design)."""
+
+    def check(where: str, value: Any) -> None:
+        table()(where, value)
+        for key, v in value.items():
+            if key in items:
+                items[key](f"{where}.{key}", v)
+
+    return check
+
+
 def array(item: Check, *, length: int | None = None, least: int = 0) -> Check:
     """An array of `length` (or at least `least`) items, each checked by `item`."""
 
@@ -156,7 +168,7 @@ FIELDS: dict[str, Check] = {
     "params": table(number),
     "values": table(integer),
     "labels": table(text),
-    "fill": table(),
+    "fill": record(kind=word, wall_mm=number, infill=number),  # ranges and further fields: diefab.mass.Fill
     "physics": _physics,
     "vertices": array(point, least=4),
     "faces": array(array(index, least=3), least=4),

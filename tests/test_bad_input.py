@@ -79,6 +79,9 @@ TYPES = [
     ("gem", "labels", "x", "labels = 'x' is a string, not a table"),
     ("gem", "labels.f5", 4, "not a string"),
     ("gem", "fill", 3, "fill = 3 is an integer, not a table"),
+    ("gem", "fill.kind", 3, "fill.kind = 3 is an integer, not a string"),
+    ("gem", "fill.wall_mm", "x", "fill.wall_mm = 'x' is a string, not a number"),
+    ("gem", "fill.infill", True, "fill.infill = true is a boolean"),
     ("gem", "physics", 3, "physics = 3 is an integer, not a table"),
     ("gem", "physics.restitution", "0.3", "restitution"),
     ("gem", "physics.restitution", True, "restitution"),
@@ -110,6 +113,12 @@ TYPES = [
 def test_wrong_type_in_a_design_file(tmp_path, bad, base, key, value, words):
     line = bad("predict", _design(tmp_path, base, key, value))
     assert line.startswith("diefab: error: ") and words in line
+
+
+def test_a_design_file_nested_too_deep(tmp_path, bad):
+    path = tmp_path / "deep.toml"
+    path.write_text('name = "x"\nfamily = "gem"\na = ' + "[" * 100_000 + "]" * 100_000 + "\n")
+    assert "nested too deeply" in bad("predict", path)
 
 
 @pytest.mark.parametrize("command", ["predict", "net", "stl", "validate"])
