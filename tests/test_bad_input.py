@@ -503,3 +503,53 @@ def test_workers_die_with_their_parent(tmp_path, args, signum):
             if _alive(pid):
                 os.kill(pid, signal.SIGKILL)
         proc.wait(timeout=10)
+
+
+# ----------------------------------------------------------------------
+# any value in any field: a design or a DiefabError, never another exception
+
+
+def _toml_values():
+    from hypothesis import strategies as st
+
+    scalars = (
+        st.booleans()
+        | st.integers(min_value=-(2**63), max_value=2**63 - 1)
+        | st.floats(allow_nan=True, allow_infinity=True)
+        | st.text(max_size=8)
+        | st.sampled_from(["f1", "4df", "solid", "print", "gem", "m.stl", "1,2,3"])
+    )
+    return st.recursive(
+        scalars,
+        lambda inner: (
+            st.lists(inner, max_size=5) | st.dictionaries(st.sampled_from(["a", "f1", "kind", "x"]), inner, max_size=3)
+        ),  # fmt: skip
+        max_leaves=12,
+    )
+
+
+FUZZ_FIELDS = [*sorted({"name", "description", "family", "target", "size_mm", "params", "values", "labels", "fill",
+               "physics", "vertices", "faces", "mesh", "center_of_mass", "inertia", "transitional",
+               "merge_tolerance_mm"}), "params.a", "values.f1", "labels.f5", "fill.wall_mm", "physics.friction",
+               "vertices.0", "faces.0"]  # fmt: skip
+
+
+@pytest.mark.parametrize("field", FUZZ_FIELDS)
+def test_any_value_in_any_field_is_a_design_or_a_diefab_error(field, tmp_path):
+    from hypothesis import HealthCheck, given, settings
+
+    from diefab.design import parse_design
+    from diefab.errors import DiefabError
+
+    base = "cube" if field.split(".")[0] in ("vertices", "faces") else "gem"
+
+    @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @given(value=_toml_values())
+    def check(value):
+        text = _design(tmp_path, base, field, value).read_text()
+        try:
+            parse_design(text, source="fuzz.toml", base=tmp_path)
+        except DiefabError:
+            pass
+
+    check()
