@@ -337,6 +337,8 @@ def goodness_of_fit(
         k = int(np.argmax((p == 0) & (x > 0)))
         raise StatsError(f"value number {k + 1} has target probability 0 but was rolled {x[k]} times")
     live = p > 0
+    if live.sum() < 2:
+        raise StatsError("the target gives only one value a chance: there is nothing to test")
     xs, ps = x[live], p[live]
     expected = n * ps
     stat = float(_chi2_stat(xs, expected))

@@ -228,6 +228,7 @@ BAD_ARGS = [
     (["stats", "--counts", "0,20,48,80,89,83,66,17,2", "--target", "4df", "--alpha", "nan"], "alpha"),
     (["stats", "--counts", "0,20,48,80,89,83,66,17,2", "--target", "4df", "--seed", "-1"], "--seed"),
     (["stats", "--counts", "1,1", "--target", "9" * 5000 + "d6"], "unknown target"),
+    (["stats", "--counts", "5,0", "--target", "1,0"], "nothing to test"),
     (["predict", "fudge-gem", "--target", "1e400,1,1,1,1,1,1,1,1"], "not finite"),
     (["optimize", "fudge-gem", "--seed", "-1"], "--seed"),
     (["optimize", "fudge-gem", "--budget", "-1"], "--budget applies only to --model simulation"),
