@@ -179,9 +179,9 @@ TRAVERSAL = [
     ("../../escape", ["net", "--format", "svg"]),
     ("/tmp/diefab-escape", ["net", "--format", "svg"]),
     ("..", ["net", "--format", "svg"]),
-    ("sub/../../escape", ["optimize", "--starts", "0"]),
-    ("fudge-gem", ["optimize", "--starts", "0", "--name", "../../escape"]),
-    ("fudge-gem", ["optimize", "--starts", "0", "--name", "/tmp/diefab-escape"]),
+    ("sub/../../escape", ["optimize", "--starts", "0", "--free", "a"]),
+    ("fudge-gem", ["optimize", "--starts", "0", "--free", "a", "--name", "../../escape"]),
+    ("fudge-gem", ["optimize", "--starts", "0", "--free", "a", "--name", "/tmp/diefab-escape"]),
 ]
 
 
