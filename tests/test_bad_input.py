@@ -554,3 +554,13 @@ def test_any_value_in_any_field_is_a_design_or_a_diefab_error(field, tmp_path):
             pass
 
     check()
+
+
+def test_a_full_disk_under_stdout_is_one_line(tmp_path):
+    if not Path("/dev/full").exists():
+        pytest.skip("no /dev/full")
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-m", "diefab", "predict", "fudge-gem", "--json"], stdout=full,
+                              stderr=subprocess.PIPE, text=True, timeout=120)  # fmt: skip
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == ["diefab: error: No space left on device"]

@@ -85,9 +85,22 @@ def error(message: str, status: int = 2):
     sys.exit(status)
 
 
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so that the interpreter's last flush cannot fail again."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):
+        pass
+
+
 def _main(argv: list[str] | None) -> None:
     try:
         rv = cli.main(args=argv, prog_name="diefab", standalone_mode=False)
+        sys.stdout.flush()
+    except BrokenPipeError:  # the reader went away (``diefab templates | head -1``): stop quietly, as click does
+        _silence_stdout()
+        sys.exit(1)
     except (click.exceptions.Abort, KeyboardInterrupt):
         click.echo("diefab: interrupted", err=True)
         sys.exit(130)
@@ -100,6 +113,10 @@ def _main(argv: list[str] | None) -> None:
         error(f"{where}{exc.format_message()}")
     except DiefabError as exc:
         error(str(exc))
+    except OSError as exc:  # the system refused (a full disk under stdout, an I/O error), not a bug
+        _silence_stdout()
+        where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
+        error(f"{exc.strerror or exc}{where}")
     except RecursionError as exc:  # a pathological input nested too deep for the parser
         error(f"input nested too deeply to read ({exc})")
     except Exception as exc:  # a bug, not bad input: one line unless asked for the traceback
