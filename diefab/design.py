@@ -43,6 +43,9 @@ __all__ = [
     "template_path",
 ]
 
+#: Largest design file read.
+MAX_DESIGN_BYTES = 64 << 20
+
 #: Resting face -> value of the paper's gem (colors of its Fig. 3).
 GEM_VALUES = {"f1": 3, "f2": 4, "f3": -3, "f4": -4, "f5": 0, "f6": 1, "f7": 2, "f8": -1, "f9": -2}
 
@@ -311,7 +314,9 @@ def load_design(spec: str | Path) -> Design:
     path = Path(text)
     if text.endswith(".toml") or path.exists() or "/" in text or "\\" in text:
         if not path.is_file():
-            raise DesignError(f"design file {text} does not exist")
+            raise DesignError(f"design file {text} {'is not a regular file' if path.exists() else 'does not exist'}")
+        if path.stat().st_size > MAX_DESIGN_BYTES:
+            raise DesignError(f"design file {text} is larger than {MAX_DESIGN_BYTES >> 20} MiB")
         try:
             content = path.read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError) as exc:

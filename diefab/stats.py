@@ -48,6 +48,8 @@ __all__ = [
 
 #: Most rolls in one set of counts (multinomial sampling works in 64-bit integers).
 MAX_COUNT = 10**15
+#: Largest roll log read (about 50 million rolls).
+MAX_LOG_BYTES = 100 << 20
 
 
 def pearson_divergence(q: np.ndarray, p: np.ndarray) -> float:
@@ -423,6 +425,10 @@ def read_rolls(path: str | Path) -> np.ndarray:
         The rolls in order.
     """
     path = Path(path)
+    if path.exists() and not path.is_file():
+        raise StatsError(f"roll log {path} is not a regular file")
+    if path.is_file() and path.stat().st_size > MAX_LOG_BYTES:
+        raise StatsError(f"roll log {path} is larger than {MAX_LOG_BYTES >> 20} MiB")
     try:
         text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:

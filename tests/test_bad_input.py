@@ -259,6 +259,13 @@ ROLL_LOGS = [
 ]
 
 
+@pytest.mark.parametrize("command", [["predict"], ["stats", "--target", "4df", "--rolls"]])
+def test_a_device_is_not_read_as_an_input(bad, command):
+    if not Path("/dev/zero").exists():
+        pytest.skip("no /dev/zero")
+    assert "not a regular file" in bad(*command, "/dev/zero")
+
+
 @pytest.mark.parametrize(("text", "words"), ROLL_LOGS, ids=["huge", "5-million-digits", "garbage"])
 def test_bad_roll_logs(tmp_path, bad, text, words):
     log = tmp_path / "rolls.txt"
