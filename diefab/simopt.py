@@ -1,4 +1,4 @@
-"""Design by simulation: fit a family's parameters to pybullet drop frequencies (issue 6).
+"""Design by simulation: fit a family's parameters to pybullet drop frequencies.
 
 The paper's final die came from minimizing Eq. (2) with simulated
 frequencies (1000 drops per evaluation).  This module does that with the
@@ -31,6 +31,7 @@ uninterrupted run would have taken, losing at most the evaluation in flight.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -558,6 +559,7 @@ class RunLog:
         self.spec_path = self.folder / "run.json"
         self.path = self.folder / "evaluations.jsonl"
         self._fh = None
+        self._created = False  # create() made the folder itself
 
     def holds_run(self) -> bool:
         """True when the folder holds a run with at least one evaluation (an empty start can be replaced)."""
@@ -584,11 +586,9 @@ class RunLog:
         self.close()
         for path in (self.spec_path, self.path, *others):
             Path(path).unlink(missing_ok=True)
-        if getattr(self, "_created", False):
-            try:
+        if self._created:
+            with contextlib.suppress(OSError):
                 self.folder.rmdir()
-            except OSError:
-                pass
 
     def spec(self) -> RunSpec:
         if not self.folder.is_dir():
