@@ -1,9 +1,11 @@
 """The ``diefab`` command line: parse, call the library, write files, print.
 
 One module per command or group of commands; shared options live in
-:mod:`diefab.cli.common`.  Every error a user can cause ends in one line on
-stderr and exit status 2; Ctrl-C ends with status 130.  Outputs are written
-atomically.
+:mod:`diefab.cli.common`.  Every error a user can cause ends in one line,
+``diefab: error: ...``, on stderr and exit status 2; a bug ends in one line and
+status 1.  Ctrl-C, SIGTERM and SIGHUP end a command cleanly with status 130.
+Outputs are written atomically, as one transaction per command, never over an
+input (:mod:`diefab.files`).
 """
 
 from __future__ import annotations
@@ -56,22 +58,20 @@ def main(argv: list[str] | None = None) -> None:
                 caught[signum] = signal.signal(signum, _terminate)
     try:
         with warnings.catch_warnings():
-            warnings.showwarning = _show_warning
+            shown: set[str] = set()
+
+            def show(message, category, filename, lineno, file=None, line=None) -> None:
+                """A Python warning as one ``diefab: warning:`` line, each text once."""
+                text = _one_line(str(message))
+                if text not in shown:
+                    shown.add(text)
+                    click.echo(f"diefab: warning: {text}", err=True)
+
+            warnings.showwarning = show
             _main(argv)
     finally:
         for signum, previous in caught.items():
             signal.signal(signum, previous)
-
-
-_SHOWN: set[str] = set()
-
-
-def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
-    """A Python warning as one ``diefab: warning:`` line, each text once."""
-    text = _one_line(str(message))
-    if text not in _SHOWN:
-        _SHOWN.add(text)
-        click.echo(f"diefab: warning: {text}", err=True)
 
 
 def _one_line(text: str) -> str:
