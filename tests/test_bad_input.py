@@ -462,29 +462,19 @@ def _alive(pid: int) -> bool:
     return "zombie" not in status
 
 
+SIM = ["optimize", "fudge-gem", "--model", "simulation", "--start", "design", "--sims-per-eval", "200000"]
+
+
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 @pytest.mark.parametrize(
     ("args", "signum"),
     [
         (["validate", "fudge-gem", "--sims", "2000000", "--workers", "2"], signal.SIGKILL),
         (["validate", "fudge-gem", "--sims", "2000000", "--workers", "2"], signal.SIGHUP),
-        (
-            [
-                "optimize",
-                "fudge-gem",
-                "--model",
-                "simulation",
-                "--start",
-                "design",
-                "--sims-per-eval",
-                "200000",
-                "--workers",
-                "2",
-            ],
-            signal.SIGKILL,
-        ),
-    ],  # fmt: skip
-    ids=["validate-SIGKILL", "validate-SIGHUP", "optimize-SIGKILL"],
+        ([*SIM, "--workers", "2"], signal.SIGKILL),
+        ([*SIM, "--workers", "2", "--budget", "7"], signal.SIGHUP),
+    ],
+    ids=["validate-SIGKILL", "validate-SIGHUP", "optimize-SIGKILL", "optimize-SIGHUP"],
 )
 def test_workers_die_with_their_parent(tmp_path, args, signum):
     proc = subprocess.Popen([sys.executable, "-m", "diefab", *args, *(["--out", str(tmp_path)] if args[0] ==
@@ -502,6 +492,10 @@ def test_workers_die_with_their_parent(tmp_path, args, signum):
         _, err = proc.communicate(timeout=30)
         if signum == signal.SIGHUP:  # a hang-up ends the run like Ctrl-C
             assert proc.returncode == 130 and len(err.strip().splitlines()) == 1, err
+        if args[0] == "optimize" and signum == signal.SIGHUP:  # how to resume, and the budget it keeps
+            assert "--resume" in err and "budget of 7 minutes" in err
+            run = json.loads((tmp_path / "fudge-gem-simulation-opt" / "run.json").read_text())
+            assert run["budget_minutes"] == 7
         deadline = time.monotonic() + 10
         while any(map(_alive, children)) and time.monotonic() < deadline:
             time.sleep(0.2)
