@@ -113,7 +113,7 @@ def write_files(files: Mapping[str | Path, str | bytes], *, inputs: Iterable[str
         ensure_dir(path.parent)
         _remove_stale(path)
     temps: list[str] = []
-    backups: dict[Path, str] = {}
+    backups: dict[Path, str | None] = {}
     done: list[Path] = []
     current = targets[0] if targets else None
     try:
@@ -123,23 +123,28 @@ def write_files(files: Mapping[str | Path, str | bytes], *, inputs: Iterable[str
             current = path
             if path.exists():
                 backups[path] = _temp_name(path)
-                os.link(path, backups[path])
+                try:
+                    os.link(path, backups[path])
+                except OSError:  # a file system without hard links: this one cannot be put back
+                    backups[path] = None
             os.replace(tmp, path)
             done.append(path)
     except BaseException as exc:
         for path in reversed(done):  # put back what was there before
             with contextlib.suppress(OSError):
-                if path in backups:
-                    os.replace(backups.pop(path), path)
-                else:
+                if path not in backups:
                     path.unlink()
+                elif backups[path] is not None:
+                    os.replace(backups.pop(path), path)
         for leftover in [*temps, *backups.values()]:
-            Path(leftover).unlink(missing_ok=True)
+            if leftover is not None:
+                Path(leftover).unlink(missing_ok=True)
         if isinstance(exc, OSError) and not isinstance(exc, OutputError):
             raise OutputError(f"cannot write {current}: {exc.strerror or exc}") from exc
         raise
     for backup in backups.values():
-        Path(backup).unlink(missing_ok=True)
+        if backup is not None:
+            Path(backup).unlink(missing_ok=True)
     for folder in {p.parent for p in targets}:
         _fsync_dir(folder)
     return targets
