@@ -545,7 +545,7 @@ def test_any_value_in_any_field_is_a_design_or_a_diefab_error(field, tmp_path):
 
     base = "cube" if field.split(".")[0] in ("vertices", "faces") else "gem"
 
-    @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
     @given(value=_toml_values())
     def check(value):
         text = _design(tmp_path, base, field, value).read_text()
