@@ -389,6 +389,7 @@ def test_a_failed_start_does_not_block_the_rerun(tmp_path, bad, run):
     code, out, err = run(*args[:-2], "--max-evals", "2", "--budget", "5", "--workers", "1", "--resume", folder)
     assert code == 0, err
     assert json.loads((folder / "run.json").read_text())["budget_minutes"] == 5
+    assert not list(tmp_path.rglob("*.tmp"))  # every rewrite of run.json and the best design was atomic
 
 
 # ----------------------------------------------------------------------
