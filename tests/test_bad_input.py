@@ -377,6 +377,10 @@ def test_a_failed_start_does_not_block_the_rerun(tmp_path, bad, run):
             "--max-evals", "1", "--out", tmp_path]  # fmt: skip
     assert "cannot reach Dask scheduler" in bad(*args, "--scheduler", "tcp://127.0.0.1:1")
     assert not any(tmp_path.iterdir())
+    leftover = tmp_path / "fudge-gem-simulation-opt"  # what a failed start used to leave: no evaluation logged
+    leftover.mkdir()
+    (leftover / "run.json").write_text("{}")
+    (leftover / "evaluations.jsonl").write_text("")
     code, out, err = run(*args, "--workers", "1", "--budget", "3", "--json")
     assert code == 0, err
     folder = Path(json.loads(out)["run_folder"])
