@@ -114,7 +114,10 @@ def _main(argv: list[str] | None) -> None:
     except DiefabError as exc:
         error(str(exc))
     except OSError as exc:  # the system refused (a full disk under stdout, an I/O error), not a bug
-        _silence_stdout()
+        try:
+            sys.stdout.flush()
+        except OSError:  # stdout itself failed: its last flush at exit must not fail again
+            _silence_stdout()
         where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
         error(f"{exc.strerror or exc}{where}")
     except RecursionError as exc:  # a pathological input nested too deep for the parser
