@@ -9,8 +9,9 @@ Every file diefab writes goes through :func:`write_files` (or
   and if anything fails the targets that had already been replaced get
   their previous content back;
 * a write that would replace one of the command's own inputs is refused;
-* temporary files are named ``.NAME.PID.XXXXXXXX.tmp``; one whose process
-  is gone (killed mid-write) is removed the next time NAME is written.
+* temporary files are named ``.NAME.PID.XXXXXXXX.tmp``; those whose process
+  is gone (killed mid-write) are removed the next time anything is written
+  to their folder.
 
 Output names come from :func:`safe_name`, so a design's name cannot lead a
 file out of the output folder.
@@ -111,7 +112,8 @@ def write_files(files: Mapping[str | Path, str | bytes], *, inputs: Iterable[str
     check_outputs(targets, inputs)
     for path in targets:
         ensure_dir(path.parent)
-        _remove_stale(path)
+    for folder in dict.fromkeys(p.parent for p in targets):
+        _remove_stale(folder)
     temps: list[str] = []
     backups: dict[Path, str | None] = {}
     done: list[Path] = []
@@ -196,18 +198,21 @@ def _write_temp(path: Path, payload: bytes) -> str:
     return tmp
 
 
-def _remove_stale(path: Path) -> None:
-    """Remove temporary files of `path` left by a process that no longer runs."""
-    pattern = re.compile(rf"\.{re.escape(_short(path))}\.(\d+)\.[a-z0-9_]{{8}}\.tmp")
+#: A temporary file of :func:`write_files`: ``.NAME.PID.XXXXXXXX.tmp``.
+_TEMP = re.compile(r"\..+\.(\d+)\.[a-z0-9_]{8}\.tmp", re.DOTALL)
+
+
+def _remove_stale(folder: Path) -> None:
+    """Remove the temporary files in `folder` left by writers that no longer run (killed mid-write)."""
     try:
-        names = os.listdir(path.parent)
+        names = os.listdir(folder)
     except OSError:
         return
     for name in names:
-        m = pattern.fullmatch(name)
+        m = _TEMP.fullmatch(name)
         if m and not _alive(int(m[1])):
             with contextlib.suppress(OSError):
-                (path.parent / name).unlink()
+                (folder / name).unlink()
 
 
 def _alive(pid: int) -> bool:

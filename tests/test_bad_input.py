@@ -359,12 +359,13 @@ def test_stale_temporary_files_of_dead_writers_are_removed(tmp_path, run):
     dead = 2**22 + 12345  # above Linux's largest pid: no such process
     stale = out / f".fudge-gem-net.svg.{dead}.abcd_123.tmp"
     live = out / f".fudge-gem-net.svg.{os.getppid()}.abcd_123.tmp"  # a running process: maybe mid-write
+    elsewhere = out / f".another-die.stl.{dead}.zz_9abcd.tmp"  # of another output: the same writer's fate
     other = out / ".notes.tmp"
-    for path in (stale, live, other):
+    for path in (stale, live, elsewhere, other):
         path.write_text("x")
     code, _, err = run("net", "fudge-gem", "--format", "svg", "--out", out)
     assert code == 0, err
-    assert not stale.exists() and live.exists() and other.exists()
+    assert not stale.exists() and not elsewhere.exists() and live.exists() and other.exists()
     assert not list(out.glob(f".*.{os.getpid()}.*.tmp"))
 
 
