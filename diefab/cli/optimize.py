@@ -9,6 +9,7 @@ from pathlib import Path
 import click
 import numpy as np
 
+from ..design import format_value
 from ..files import atomic_write, check_outputs, ensure_dir, output_path, safe_name
 from .common import (
     console,
@@ -121,7 +122,7 @@ def optimize(ctx, design, params, model, target, seed, min_margin, starts, free,
     )
     con.print(
         "value      "
-        + " ".join(f"{v:>6d}" for v in best.support)
+        + " ".join(f"{format_value(v, min(best.support) < 0):>6s}" for v in best.support)
         + "\nmodel x81  "
         + " ".join(f"{81 * q:6.2f}" for q in result.values)
         + "\ntarget x81 "
