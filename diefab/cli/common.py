@@ -80,7 +80,7 @@ def get_design(spec: str, params: tuple[str, ...] = (), target: str | None = Non
 
 
 def design_inputs(spec: str, design: Design) -> list[Path]:
-    """The files DESIGN was read from (design file or shipped template, mesh, SVG symbols): no output may replace them."""
+    """The files DESIGN was read from (design file or template, mesh, SVG symbols): no output may replace them."""
     from ..design import template_path
     from ..errors import DiefabError
 
