@@ -28,8 +28,10 @@ diefab.errors.PhysicsError: physics friction=-1.0 must be a finite number >= 0
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+import signal
 import sys
 import time
 from collections.abc import Callable, Mapping
@@ -382,15 +384,37 @@ def _pool(workers: int):
         # fork starts a worker in milliseconds and needs no `if __name__ == "__main__"` guard in the
         # caller's script; the parent never holds a pybullet world the children would touch
         method = "fork" if sys.platform == "linux" else "spawn"
-        _POOL = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method), initializer=_worker_start,
-                                    initargs=(os.getpid(),))  # fmt: skip
-        _POOL_SIZE = workers
+        # Start the workers now, with the stop signals held back: an interrupt raised inside a fork
+        # hook (logging's lock release) is swallowed by Python, and the run would go on.
+        with _signals_held():
+            _POOL = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method),
+                                        initializer=_worker_start, initargs=(os.getpid(),))  # fmt: skip
+            _POOL_SIZE = workers
+            _POOL.submit(int).result()
         if not _ATEXIT:
             import atexit
 
             atexit.register(shutdown_pool)  # before the interpreter tears down what the pool needs
             _ATEXIT.append(True)
     return _POOL
+
+
+_STOP_SIGNALS = {getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)}
+
+
+@contextlib.contextmanager
+def _signals_held():
+    """Hold back Ctrl-C, SIGTERM and SIGHUP in this thread (delivered when the block ends)."""
+    import threading
+
+    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def _worker_start(parent: int) -> None:
@@ -403,6 +427,8 @@ def _worker_start(parent: int) -> None:
     """
     from .world import worker_signals
 
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, _STOP_SIGNALS)  # held back while the parent forked
     worker_signals()
     if not _die_with_parent() or os.getppid() != parent:  # no prctl, or the parent is already gone
         import threading
@@ -415,7 +441,6 @@ def _die_with_parent() -> bool:
     if not sys.platform.startswith("linux"):
         return False
     import ctypes
-    import signal
 
     try:
         libc = ctypes.CDLL(None, use_errno=True)
