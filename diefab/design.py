@@ -26,10 +26,9 @@ from typing import Any
 
 import numpy as np
 
-from . import tolerances as tol
 from .errors import DesignError, GeometryError
-from .families import family, gem_polyhedron
-from .geometry import Polyhedron, face_margins, resting_faces, up_faces
+from .families import family
+from .geometry import Polyhedron, face_margins, resting_faces
 from .mass import Fill, MassProperties, mass_properties
 from .schema import check_design_data, check_mapping
 from .targets import Target, parse_target
@@ -71,7 +70,8 @@ class Design:
     ----------
     name : str
     family : str
-        ``gem``, ``convex`` or ``mesh``.
+        A family of :mod:`diefab.families` (``gem``, ``ngem``, ``prism``, ...,
+        ``convex`` or ``mesh``).
     params : mapping str -> float
         Family parameters (the gem's a, b, c, d and optional e).
     values : mapping str -> int
@@ -84,11 +84,12 @@ class Design:
         Overrides of the computed label text, keyed by the face that carries it.
     size_mm : float
         Physical size as dice makers measure it (:attr:`size_note`): the
-        gem's girdle short side (2 model units along its z); for ``convex``
-        and ``mesh`` dice, face to face when every face has a parallel
-        opposite (a d6, d8, d20: the widest such pair), else the largest
-        distance between two vertices (a d4's edge).  It never depends on
-        how the vertices are rotated.
+        gem's girdle short side (2 model units along its z); for the other
+        families their stated reference length (``Family.reference``); for
+        ``convex``, ``mesh`` and ``freeform`` dice, face to face when every
+        face has a parallel opposite (a d6, d8, d20: the widest such pair),
+        else the largest distance between two vertices (a d4's edge).  It
+        never depends on how the vertices are rotated.
     fill : Fill
     physics : mapping
         Simulation settings stored with the design (see :mod:`diefab.physics`).
@@ -162,8 +163,9 @@ class Design:
     @cached_property
     def polyhedron(self) -> Polyhedron:
         """The die in model units."""
-        if self.family == "gem":
-            return gem_polyhedron(self.params)
+        fam = family(self.family)
+        if fam.build is not None:
+            return fam.polyhedron(self.params)
         try:
             if self.family == "convex":
                 if self.faces is None:
@@ -223,9 +225,25 @@ class Design:
 
     @cached_property
     def label_face(self) -> dict[str, str | None]:
-        """Resting face -> the face pointing up that shows its value (None: a vertex or edge is up)."""
+        """Resting face -> the face pointing up that shows its value (None: a vertex or edge is up).
+
+        What points up follows :func:`diefab.readings.readings`.
+        """
+        from .readings import readings
+
         poly = self.polyhedron
-        return {poly.names[k]: (None if up is None else poly.names[up]) for k, up in enumerate(up_faces(poly))}
+        return {
+            poly.names[k]: (poly.names[r.face] if r is not None and r.kind == "face" else None)
+            for k, r in enumerate(readings(poly))
+        }
+
+    @cached_property
+    def markings(self) -> list:
+        """Every text net and stl print, as :class:`diefab.readings.Marking` (face, text, corner or edge)."""
+        from .readings import markings
+
+        signed = min(self.support) < 0
+        return markings(self.polyhedron, self.values, {n: format_value(v, signed) for n, v in self.values.items()})
 
     @cached_property
     def label_of(self) -> dict[str, str]:
@@ -296,14 +314,8 @@ def reference_length(design: Design) -> tuple[float, str]:
     """
     if design.family == "gem":
         return 2.0, "girdle short side"
-    poly = design.polyhedron
-    cos = poly.normals @ poly.normals.T
-    opposite = np.argmin(cos, axis=1)
-    if np.all(cos[np.arange(len(cos)), opposite] < -1 + tol.COPLANAR):
-        return float((poly.offsets + poly.offsets[opposite]).max()), "face to face"
-    from scipy.spatial.distance import pdist
-
-    return float(pdist(poly.vertices).max()), "largest vertex-to-vertex distance"
+    fam = family(design.family)
+    return fam.length(design.polyhedron), fam.reference_name(design.polyhedron)
 
 
 # ----------------------------------------------------------------------

@@ -227,8 +227,6 @@ class SimulationObjective:
         self.problem = Problem(self.design, spec.names, "solid-angle", spec.objective, spec.min_margin)
         self.settings = PhysicsSettings.from_mapping(spec.physics)
         self.workers, self.scheduler = workers, scheduler
-        index = {v: i for i, v in enumerate(self.design.support)}
-        self._value_index = np.array([index[self.design.values[n]] for n in self.design.polyhedron.names])
         self._target = self.design.target_distribution.aligned(self.design.support)
 
     @property
@@ -248,10 +246,12 @@ class SimulationObjective:
         except DesignError:
             return {**record, "objective": INVALID, "feasible": False, "min_margin": None}
         center = mass_properties(poly, self.design.fill, mm_per_unit=self.design.mm_per_unit).center
-        margin = float(face_margins(poly, center).min())
+        margins = face_margins(poly, center)
+        margin = float(margins[self.design.resting_mask()].min())
         record["min_margin"] = margin
-        if margin <= self.spec.min_margin:
-            return {**record, "objective": INFEASIBLE + self.spec.min_margin - margin, "feasible": False}
+        violation = self.problem.violation(margins)
+        if violation >= 0:
+            return {**record, "objective": INFEASIBLE + violation, "feasible": False}
         candidate = replace(self.design, params=params)
         if self.spec.labels:
             try:
@@ -262,7 +262,7 @@ class SimulationObjective:
             candidate, int(drops), seed=self.spec.seed, workers=self.workers, settings=self.settings,
             scheduler=self.scheduler,
         )  # fmt: skip
-        counts = np.bincount(self._value_index, weights=result.face_counts, minlength=self.k)
+        counts = result.value_counts(candidate)
         q = counts / max(counts.sum(), 1)
         return {
             **record,

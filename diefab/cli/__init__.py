@@ -16,6 +16,7 @@ import sys
 import click
 
 from ..errors import DiefabError
+from .design import design
 from .net import net
 from .optimize import optimize
 from .predict import predict, templates
@@ -32,7 +33,7 @@ def cli() -> None:
     """Design, simulate and fabricate dice with unequal face probabilities."""
 
 
-for _command in (templates, predict, stats, optimize, validate, net, stl):
+for _command in (templates, predict, stats, design, optimize, validate, net, stl):
     cli.add_command(_command)
 
 

@@ -119,7 +119,7 @@ def free_parameters(design: Design, free: str | None) -> list[str] | None:
     from ..families import family
 
     names = [n.strip() for n in free.split(",") if n.strip()]
-    known = [p.name for p in family(design.family).parameters]
+    known = [p.name for p in family(design.family).parameters if not p.integer]
     bad = [n for n in names if n not in known]
     if bad or not names:
         raise click.BadParameter(

@@ -103,8 +103,8 @@ def optimize(ctx, design, params, model, target, seed, min_margin, starts, free,
         "values": values_dict(best, result.values),
         "target_values": values_dict(best, goal),
         "margins": dict(zip(best.polyhedron.names, margins.tolist())),
-        "min_margin": float(margins.min()),
-        "min_margin_mm": float(margins.min() * best.mm_per_unit),
+        "min_margin": result.min_margin,
+        "min_margin_mm": result.min_margin * best.mm_per_unit,
         "binding_face": result.binding_face,
         "evaluations": result.evaluations,
         "starts": result.starts,
@@ -129,7 +129,7 @@ def optimize(ctx, design, params, model, target, seed, min_margin, starts, free,
         + " ".join(f"{81 * q:6.2f}" for q in goal)
     )
     con.print(
-        f"smallest stability margin {margins.min():.4f} ({margins.min() * best.mm_per_unit:.2f} mm at "
+        f"smallest stability margin {result.min_margin:.4f} ({result.min_margin * best.mm_per_unit:.2f} mm at "
         f"{best.size_mm:g} mm) on face {result.binding_face}; required {min_margin:g}"
     )
     con.print(f"wrote {path}")
@@ -245,7 +245,7 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
             log.update(spec)
         fresh = False
     else:
-        names = free_parameters(d, free) or [p.name for p in family(d.family).parameters]
+        names = free_parameters(d, free) or family(d.family).free_names(d.params)
         run_name = name or f"{d.name}-simulation-opt"
         log = RunLog(output_path(out_dir, run_name, ""))
         if log.holds_run():
