@@ -32,6 +32,7 @@ from .families.base import default_length
 from .geometry import Polyhedron, face_margins, resting_faces
 from .mass import Fill, MassProperties, mass_properties, mesh_mass_properties, stated
 from .meshes import ClosedMesh
+from .schema import check_design_data, check_mapping
 from .targets import Target, parse_target
 
 __all__ = [
@@ -43,6 +44,9 @@ __all__ = [
     "parse_design",
     "template_path",
 ]
+
+#: Largest design file read.
+MAX_DESIGN_BYTES = 64 << 20
 
 #: Resting face -> value of the paper's gem (colors of its Fig. 3).
 GEM_VALUES = {"f1": 3, "f2": 4, "f3": -3, "f4": -4, "f5": 0, "f6": 1, "f7": 2, "f8": -1, "f9": -2}
@@ -142,9 +146,15 @@ class Design:
     merge_tolerance_mm: float | None = None
 
     def __post_init__(self) -> None:
+        for key in ("name", "family", "target", "description"):
+            if not isinstance(getattr(self, key), str):
+                raise DesignError(f"{key}={getattr(self, key)!r} must be a string")
+        for key in ("params", "values", "labels", "physics"):
+            check_mapping(key, getattr(self, key))
         fam = family(self.family)
         object.__setattr__(self, "params", fam.check_params(self.params))
-        if not (isinstance(self.size_mm, (int, float)) and math.isfinite(self.size_mm) and self.size_mm > 0):
+        size = self.size_mm
+        if isinstance(size, bool) or not (isinstance(size, (int, float)) and math.isfinite(size) and size > 0):
             raise DesignError(f"size_mm={self.size_mm} must be a positive number of millimetres")
         if self.family == "convex" and self.vertices is None:
             raise DesignError("a convex design needs 'vertices'")
@@ -462,7 +472,9 @@ def load_design(spec: str | Path) -> Design:
     path = Path(text)
     if text.endswith(".toml") or path.exists() or "/" in text or "\\" in text:
         if not path.is_file():
-            raise DesignError(f"design file {text} does not exist")
+            raise DesignError(f"design file {text} {'is not a regular file' if path.exists() else 'does not exist'}")
+        if path.stat().st_size > MAX_DESIGN_BYTES:
+            raise DesignError(f"design file {text} is larger than {MAX_DESIGN_BYTES >> 20} MiB")
         try:
             content = path.read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError) as exc:
@@ -477,6 +489,10 @@ def parse_design(content: str, *, source: str = "<string>", base: Path | None = 
         data = tomllib.loads(content)
     except tomllib.TOMLDecodeError as exc:
         raise DesignError(f"{source}: malformed TOML: {exc}") from exc
+    try:
+        check_design_data(data)
+    except DesignError as exc:
+        raise DesignError(f"{source}: {exc}") from None
     unknown = sorted(set(data) - _KEYS)
     if unknown:
         raise DesignError(f"{source}: unknown key {unknown[0]!r} (keys: {', '.join(sorted(_KEYS))})")

@@ -121,7 +121,8 @@ class RealRolls:
         """
         from dataclasses import replace
 
-        from .design import Design, _reference_of, design_to_toml
+        from .design import Design, design_to_toml
+        from .families.base import default_length
         from .geometry import Polyhedron, resting_faces
 
         if self.hull_vertices is None:
@@ -129,7 +130,7 @@ class RealRolls:
         scale = 2.0 / float(np.ptp(self.hull_vertices, axis=0).max())  # model units per mm
         vertices = self.hull_vertices * scale
         poly = Polyhedron.from_points(vertices, strict=False, merge_tolerance=merge_tolerance_mm * scale)
-        size_mm = _reference_of(poly)[0] / scale  # the real length of what size_mm measures
+        size_mm = default_length(poly)[0] / scale  # the real length of what size_mm measures
         body = {}
         if self.center_of_mass is not None:
             body["center_of_mass"] = tuple((self.center_of_mass * scale).tolist())

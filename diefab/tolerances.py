@@ -34,3 +34,6 @@ STL_VOLUME_REL = 0.005
 #: Paper nets (mm): two flat polygons overlapping by no more than this along
 #: some axis only touch (shared fold edges, tab bases, vertices).
 NET_OVERLAP_MM = 1e-6
+
+#: Probabilities summing to 1 within this are a distribution.
+PROBABILITY_SUM = 1e-6

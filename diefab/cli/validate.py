@@ -9,13 +9,25 @@ import click
 import numpy as np
 
 from ..design import format_value
-from .common import console, design_argument, emit_json, get_design, heading, json_option, physics_options, values_dict
+from .common import (
+    console,
+    design_argument,
+    design_inputs,
+    emit_json,
+    get_design,
+    heading,
+    json_option,
+    physics_options,
+    refuse_options,
+    seed_option,
+    values_dict,
+)
 
 
 @click.command()
 @design_argument
 @click.option("--sims", type=int, default=10_000, show_default=True, help="Number of simulated drops.")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed: the same seed gives the same counts.")
+@seed_option("Seed: the same seed gives the same counts.")
 @click.option("--workers", type=int, default=None, help="Worker processes (default: all cores).")
 @click.option("--scheduler", default=None, metavar="ADDRESS", help="Run on this Dask scheduler (tcp://host:8786).")
 @click.option("--plot", "plot_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
@@ -26,17 +38,21 @@ from .common import console, design_argument, emit_json, get_design, heading, js
 @click.option("--target", default=None, help="Override the design's target distribution.")
 @physics_options
 @json_option
-def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, target, as_json, **physics) -> None:
+@click.pass_context
+def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, fill, target, as_json,
+             **physics) -> None:  # fmt: skip
     """Drop DESIGN many times in pybullet and test the counts against its target."""
     import os
     from dataclasses import replace
 
     from ..errors import PhysicsError
-    from ..files import atomic_write, ensure_dir
+    from ..files import atomic_write, check_outputs, ensure_dir
     from ..models import value_probabilities
     from ..physics import PhysicsSettings, SimulationInterrupted, plot_validation, simulate
     from ..stats import goodness_of_fit
 
+    if scheduler is not None:
+        refuse_options(ctx, ["workers"], "does not apply with --scheduler (the cluster's workers run the drops)")
     d = get_design(design, params, target)
     if fill:
         d = replace(d, fill=replace(d.fill, kind=fill))
@@ -45,6 +61,7 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, ta
         if plot_file.suffix.lower() not in (".png", ".svg"):
             raise click.BadParameter(f"{plot_file} must end in .png or .svg", param_hint="--plot")
         ensure_dir(plot_file.parent)
+        check_outputs([plot_file], design_inputs(design, d))
     bar = None
     if sys.stderr.isatty():
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
@@ -103,7 +120,8 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, ta
         "settings": settings.as_dict(),
     }
     if plot_file is not None:
-        atomic_write(plot_file, plot_validation(d, result, fmt=plot_file.suffix.lower()[1:]))
+        atomic_write(plot_file, plot_validation(d, result, fmt=plot_file.suffix.lower()[1:]),
+                     inputs=design_inputs(design, d))  # fmt: skip
     if as_json:
         emit_json(out)
         return
