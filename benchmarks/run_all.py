@@ -25,6 +25,7 @@ BENCHMARKS = {
     "bench_fastmodel.py": ([], ["--designs", "4", "--drops", "3000"]),
     "bench_simopt.py": ([], ["--budget", "1", "--validate", "3000"]),
     "bench_calibrate.py": ([], ["--drops", "200", "--candidates", "3", "--cache", "/dev/null"]),
+    "bench_realrolls.py": ([], ["--sims", "200"]),
 }
 
 

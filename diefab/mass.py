@@ -30,10 +30,11 @@ from typing import Literal
 import numpy as np
 
 from . import tolerances as tol
-from .errors import DesignError
+from .errors import DesignError, GeometryError
 from .geometry import Polyhedron, _cross
+from .meshes import ClosedMesh
 
-__all__ = ["Fill", "MassProperties", "inset", "mass_properties"]
+__all__ = ["Fill", "MassProperties", "inset", "mass_properties", "mesh_mass_properties", "stated"]
 
 _CANONICAL = np.array([[2.0, 1.0, 1.0], [1.0, 2.0, 1.0], [1.0, 1.0, 2.0]]) / 120
 
@@ -80,7 +81,12 @@ class MassProperties:
 
 def _solid_moments(poly: Polyhedron) -> tuple[float, np.ndarray, np.ndarray]:
     """Volume, first moment and second moment ∫ x xᵀ dV of the solid."""
-    v = poly.vertices[poly.triangles]  # tetrahedra (0, a, b, c)
+    return _solid_moments_of(poly.vertices[poly.triangles])
+
+
+def _solid_moments_of(v: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    """The same for the closed surface of outward triangles `v` ((t, 3, 3), corners of each)."""
+    # tetrahedra (0, a, b, c)
     det = np.einsum("ij,ij->i", v[:, 0], _cross(v[:, 1], v[:, 2]))
     volume = det.sum() / 6
     first = (det[:, None] * v.sum(axis=1)).sum(axis=0) / 24
@@ -91,7 +97,11 @@ def _solid_moments(poly: Polyhedron) -> tuple[float, np.ndarray, np.ndarray]:
 
 def _shell_moments(poly: Polyhedron) -> tuple[float, np.ndarray, np.ndarray]:
     """Area, first moment and second moment ∫ x xᵀ dA of the surface."""
-    v = poly.vertices[poly.triangles]
+    return _shell_moments_of(poly.vertices[poly.triangles])
+
+
+def _shell_moments_of(v: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    """The same for the triangles `v` ((t, 3, 3), corners of each)."""
     area = 0.5 * np.linalg.norm(_cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1)
     s = v.sum(axis=1)
     first = (area[:, None] * s).sum(axis=0) / 3
@@ -126,7 +136,12 @@ def inset(poly: Polyhedron, distance: float) -> Polyhedron | None:
         hs = HalfspaceIntersection(np.column_stack([normals, -offsets]), res.x[:3])
     except QhullError:
         return None
-    return Polyhedron.from_points(hs.intersections, strict=False)
+    try:
+        return Polyhedron.from_points(hs.intersections, strict=False)
+    except GeometryError:
+        # planes of many small faces meet in near-duplicate corners: merge within a sliver of the die's size
+        scale = max(1.0, float(np.ptp(poly.vertices, axis=0).max()))
+        return Polyhedron.from_points(hs.intersections, strict=False, merge_tolerance=tol.INSET_MERGE * scale)
 
 
 def mass_properties(poly: Polyhedron, fill: Fill | None = None, *, mm_per_unit: float = 1.0) -> MassProperties:
@@ -154,3 +169,42 @@ def mass_properties(poly: Polyhedron, fill: Fill | None = None, *, mm_per_unit: 
     inner = _solid_moments(inner_poly)
     hollow = 1 - fill.infill
     return _properties(outer[0] - hollow * inner[0], outer[1] - hollow * inner[1], outer[2] - hollow * inner[2])
+
+
+def mesh_mass_properties(mesh: ClosedMesh, fill: Fill | None = None, *, mm_per_unit: float = 1.0) -> MassProperties:
+    """Mass properties of the body bounded by a closed, possibly non-convex mesh, unit density.
+
+    ``solid`` and ``shell`` are exact for the mesh.  ``print`` takes the
+    wall as a thin layer of the surface, ``wall_mm`` thick, and the rest of
+    the volume at ``infill``: exact to first order in the wall thickness
+    over the body's local size (a convex body's print is computed exactly
+    by :func:`mass_properties` on its polyhedron).
+    """
+    fill = fill or Fill()
+    v = mesh.corners
+    if fill.kind == "solid":
+        return _properties(*_solid_moments_of(v))
+    if fill.kind == "shell":
+        return _properties(*_shell_moments_of(v))
+    solid, surface = _solid_moments_of(v), _shell_moments_of(v)
+    wall = fill.wall_mm / mm_per_unit
+    if wall * surface[0] >= solid[0]:  # walls meet: the print is solid
+        return _properties(*solid)
+    return _properties(*(fill.infill * a + (1 - fill.infill) * wall * b for a, b in zip(solid, surface)))
+
+
+def stated(props: MassProperties, center=None, inertia=None) -> MassProperties:
+    """`props` with a stated centre of mass and, optionally, inertia per unit mass (model units).
+
+    Parameters
+    ----------
+    center : (3,) float, optional
+        Replaces the centre of mass; the inertia tensor is kept (it is the
+        body's about its own centre of mass) unless `inertia` is given.
+    inertia : (3, 3) float, optional
+        Inertia tensor about the centre of mass divided by the mass,
+        model units²: multiplied by the body's mass.
+    """
+    c = props.center if center is None else np.asarray(center, dtype=float)
+    i = props.inertia if inertia is None else props.mass * np.asarray(inertia, dtype=float)
+    return MassProperties(props.mass, c, i)

@@ -100,7 +100,7 @@ class Problem:
     def params(self, x: np.ndarray) -> dict[str, float]:
         """Unit-cube point -> parameter mapping (fixed parameters included)."""
         lo, hi = self.bounds.T
-        free = lo + np.clip(x, 0, 1) * (hi - lo)
+        free = np.clip(lo + np.clip(x, 0, 1) * (hi - lo), lo, hi)  # rounding must not step past a bound
         return {**self.design.params, **{n: float(v) for n, v in zip(self.names, free)}}
 
     def unit(self, params: dict[str, float]) -> np.ndarray:

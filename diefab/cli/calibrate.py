@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..files import atomic_write
+from ..files import atomic_write, output_path
 from .common import console, emit_json, get_design, json_option, out_option, physics_file_option, run_logged
 
 
@@ -125,7 +125,7 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
                          sims_per_eval=sims_per_eval, max_sims=max_sims_per_eval or 8 * sims_per_eval, method=method,
                          sigma0=sigma)  # fmt: skip
         run_name = name
-        log = CalibrationLog(out_dir / run_name)
+        log = CalibrationLog(output_path(out_dir, run_name, ""))
         log.create(spec)
         history = []
     if warning:
@@ -141,7 +141,7 @@ def run(spec, log, run_name, history, budget, max_evals, workers, scheduler, as_
     from .optimize import _simulation_view
 
     dice = spec.real_dice
-    profile_path = log.folder / f"{run_name}.toml"
+    profile_path = output_path(log.folder, run_name, ".toml")
     command = f"diefab calibrate (run {log.folder}; continue it with --resume)"
     live, update = _simulation_view(spec, budget * 60, history)
     records = list(history)

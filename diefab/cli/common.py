@@ -37,7 +37,7 @@ def note_fast_fill(d: Design, model: str, fill: str) -> None:
     """One line on stderr when the fast model's gem correction would be extrapolated to another fill."""
     if model == "fast" and d.family == "gem" and fill != "solid":
         click.echo(
-            f"note: the fast model's gem correction was learned on solid gems; with a {fill} fill it is an "
+            f"diefab: note: the fast model's gem correction was learned on solid gems; with a {fill} fill it is an "
             "extrapolation (README: the fast model), so check the die with diefab validate",
             err=True,
         )
@@ -77,6 +77,39 @@ def get_design(spec: str, params: tuple[str, ...] = (), target: str | None = Non
     if target is not None:
         design = design.with_target(target)
     return design
+
+
+def design_inputs(spec: str, design: Design) -> list[Path]:
+    """The files DESIGN was read from (design file or template, mesh, SVG symbols): no output may replace them."""
+    from ..design import template_path
+    from ..errors import DiefabError
+
+    files = []
+    if Path(spec).is_file():
+        files.append(Path(spec))
+    else:
+        try:
+            files.append(Path(str(template_path(spec))))
+        except DiefabError:
+            pass
+    if design.mesh is not None:
+        files.append(Path(design.mesh))
+    files += [Path(text[4:].strip()) for text in design.labels.values() if text.startswith("svg:")]  # symbols
+    return files
+
+
+def refuse_options(ctx: click.Context, names: list[str], why: str) -> None:
+    """Raise a usage error if any of the named parameters was given on the command line."""
+    for name in names:
+        source = ctx.get_parameter_source(name)
+        if source is not None and source.name in ("COMMANDLINE", "ENVIRONMENT"):
+            param = next(p for p in ctx.command.params if p.name == name)
+            raise click.UsageError(f"{param.opts[0]} {why}", ctx=ctx)
+
+
+def seed_option(help_text: str):
+    """``--seed``: a non-negative integer (NumPy seeds cannot be negative)."""
+    return click.option("--seed", type=click.IntRange(0, 2**63 - 1), default=0, show_default=True, help=help_text)
 
 
 def free_parameters(design: Design, free: str | None) -> list[str] | None:
@@ -201,10 +234,11 @@ def physics_options(func):
     return func
 
 
-def run_logged(call, log, live, client, resume: str):
+def run_logged(call, log, live, client, resume: str, on_failure=None):
     """``call()`` with the run `log` open and the `live` panel shown; Ctrl-C says how to resume.
 
-    Closes the log, the panel and the Dask `client` (if any) however the run ends.
+    Closes the log, the panel and the Dask `client` (if any) however the run
+    ends; `on_failure()` runs first when `call` raises anything but an interrupt.
     """
     import sys
 
@@ -219,6 +253,10 @@ def run_logged(call, log, live, client, resume: str):
         log.close()
         click.echo(f"diefab: interrupted; resume with: {resume}", err=True)
         sys.exit(130)
+    except BaseException:
+        if on_failure is not None:
+            on_failure()
+        raise
     finally:
         if live:
             live.stop()

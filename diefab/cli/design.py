@@ -50,7 +50,7 @@ def design(target, faces, family_name, fill, model, budget, name, seed, size_mm,
     from dataclasses import replace
 
     from ..design import design_to_toml
-    from ..files import atomic_write, ensure_dir
+    from ..files import atomic_write, ensure_dir, output_path
     from ..mass import Fill
     from ..physics import simulate
     from ..stats import goodness_of_fit, pearson_divergence, tvd
@@ -81,7 +81,7 @@ def design(target, faces, family_name, fill, model, budget, name, seed, size_mm,
         description=f"designed for {target} by diefab design ({found.model} model, seed {seed})",
     )
     path = atomic_write(
-        out_dir / f"{d.name}.toml",
+        output_path(out_dir, d.name, ".toml"),
         design_to_toml(d, comment=f"Written by: diefab design {target} --model {model} --seed {seed}"),
     )
     aligned = goal.aligned(d.support)

@@ -6,11 +6,13 @@ import sys
 from pathlib import Path
 
 import click
+import numpy as np
 
 from ..design import format_value
 from .common import (
     console,
     design_argument,
+    design_inputs,
     emit_json,
     get_design,
     heading,
@@ -18,6 +20,8 @@ from .common import (
     physics_file_option,
     physics_options,
     physics_settings,
+    refuse_options,
+    seed_option,
     values_dict,
 )
 
@@ -25,7 +29,7 @@ from .common import (
 @click.command()
 @design_argument
 @click.option("--sims", type=int, default=10_000, show_default=True, help="Number of simulated drops.")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed: the same seed gives the same counts.")
+@seed_option("Seed: the same seed gives the same counts.")
 @click.option("--workers", type=int, default=None, help="Worker processes (default: all cores).")
 @click.option("--scheduler", default=None, metavar="ADDRESS", help="Run on this Dask scheduler (tcp://host:8786).")
 @click.option("--plot", "plot_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
@@ -40,8 +44,9 @@ from .common import (
 @physics_file_option
 @physics_options
 @json_option
-def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, target, sensitivity, physics_profile,
-             as_json, **physics) -> None:  # fmt: skip
+@click.pass_context
+def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, fill, target, sensitivity,
+             physics_profile, as_json, **physics) -> None:  # fmt: skip
     """Drop DESIGN many times in pybullet and test the counts against its target.
 
     With --sensitivity, drop it under each standard throw and table instead
@@ -52,11 +57,13 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, ta
     from dataclasses import replace
 
     from ..errors import PhysicsError
-    from ..files import atomic_write, ensure_dir
+    from ..files import atomic_write, check_outputs, ensure_dir
     from ..models import value_probabilities
     from ..physics import SimulationInterrupted, plot_validation, simulate
     from ..stats import goodness_of_fit
 
+    if scheduler is not None:
+        refuse_options(ctx, ["workers"], "does not apply with --scheduler (the cluster's workers run the drops)")
     d = get_design(design, params, target)
     if fill:
         d = replace(d, fill=replace(d.fill, kind=fill))
@@ -69,6 +76,7 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, ta
         if plot_file.suffix.lower() not in (".png", ".svg"):
             raise click.BadParameter(f"{plot_file} must end in .png or .svg", param_hint="--plot")
         ensure_dir(plot_file.parent)
+        check_outputs([plot_file], design_inputs(design, d))
     bar = None
     if sys.stderr.isatty():
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
@@ -93,6 +101,8 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, ta
     fit = goodness_of_fit(counts, goal, seed=seed)
     model = value_probabilities(d, "solid-angle")
     keys = [str(v) for v in d.support]
+    # values the target never rolls, rolled: counted and reported (they reject the target outright)
+    unexpected = {k: int(c) for k, c, g in zip(keys, counts, goal) if g == 0 and c > 0}
     out = {
         "design": d.name,
         "params": dict(d.params),
@@ -108,7 +118,9 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, ta
         "solid_angle": values_dict(d, model),
         "cocked": result.cocked,
         "unsettled": result.unsettled,
-        "chi2": fit.chi2,
+        "zero_weight_rolls": unexpected,
+        "transitional": list(d.transitional_faces),
+        "chi2": fit.chi2 if np.isfinite(fit.chi2) else None,
         "df": fit.df,
         "p_value": fit.p_value,
         "p_value_mc": fit.p_value_mc,
@@ -123,7 +135,8 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, ta
         "settings": settings.as_dict(),
     }
     if plot_file is not None:
-        atomic_write(plot_file, plot_validation(d, result, fmt=plot_file.suffix.lower()[1:]))
+        atomic_write(plot_file, plot_validation(d, result, fmt=plot_file.suffix.lower()[1:]),
+                     inputs=design_inputs(design, d))  # fmt: skip
     if as_json:
         emit_json(out)
         return
@@ -138,11 +151,16 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, ta
         table.add_row(format_value(v, signed), str(counts[k]), f"{fit.observed[k]:.4f}", f"[{lo:.4f}, {hi:.4f}]",
                       f"{goal[k]:.4f}", f"{model[k]:.4f}")  # fmt: skip
     con.print(table)
-    con.print("faces: " + "  ".join(f"{n}={c}" for n, c in zip(result.faces, result.face_counts)))
+    shown = [f"{n}={c}" for n, c in zip(result.faces, result.face_counts) if n in d.values]
+    more = f"  ... ({len(shown) - 40} more; --json lists all)" if len(shown) > 40 else ""
+    con.print("faces: " + "  ".join(shown[:40]) + more)
     con.print(
         f"{result.n} drops: {result.landed} on a face, {result.cocked} cocked, {result.unsettled} unsettled; "
         f"{result.seconds:.1f} s, {result.drops_per_second:,.0f} drops/s"
     )
+    if unexpected:
+        con.print("rolled values with target weight 0: " + "  ".join(f"{k} x{c}" for k, c in unexpected.items())
+                  + " (impossible under the target: p = 0)")  # fmt: skip
     con.print(f"chi2 = {fit.chi2:.3f} (df {fit.df}), p = {fit.p_value:.4g} (Monte-Carlo {fit.p_value_mc:.4g})")
     con.print(f"TVD = {fit.tvd:.4f} (expected under the target {fit.expected_tvd:.4f})   "
               f"JSD = {fit.jsd:.5f} (expected {fit.expected_jsd:.5f})")  # fmt: skip

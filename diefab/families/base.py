@@ -35,7 +35,7 @@ class Parameter:
     integer: bool = False
 
     def check(self, value: float) -> float:
-        if isinstance(value, bool):
+        if isinstance(value, (bool, str)):
             raise DesignError(f"{self.name}={value!r} is not a number")
         try:
             value = float(value)
