@@ -29,7 +29,7 @@ import numpy as np
 from .errors import DesignError, GeometryError
 from .families import family, gem_polyhedron
 from .geometry import Polyhedron, face_margins, up_faces
-from .mass import Fill, MassProperties, mass_properties
+from .mass import Fill, MassProperties
 from .targets import Target, parse_target
 
 __all__ = [
@@ -194,8 +194,14 @@ class Design:
         return {k: out[k] for k in self.polyhedron.names if out.get(k)}
 
     def mass_properties(self, fill: Fill | None = None) -> MassProperties:
-        """Mass properties in model units for the design's (or the given) fill."""
-        return mass_properties(self.polyhedron, fill or self.fill, mm_per_unit=self.mm_per_unit)
+        """Mass properties in model units for the design's (or the given) fill, as made.
+
+        A paper die includes the glue tabs of its net, a print its engraved
+        labels (see :mod:`diefab.bodies`).
+        """
+        from .bodies import body_properties
+
+        return body_properties(self, fill or self.fill)
 
     def margins(self, fill: Fill | None = None) -> np.ndarray:
         """(m,) float: stability margin of each face, model units."""
@@ -275,8 +281,8 @@ def parse_design(content: str, *, source: str = "<string>", base: Path | None = 
         if key not in data:
             raise DesignError(f"{source}: missing key {key!r}")
     try:
-        fill = Fill(**data.get("fill", {}))
-    except TypeError as exc:
+        fill = Fill.from_mapping(data.get("fill", {}), "[fill]")
+    except DesignError as exc:
         raise DesignError(f"{source}: [fill]: {exc}") from exc
     kwargs = {
         k: data[k] for k in ("name", "family", "params", "values", "target", "labels", "description") if k in data
@@ -318,7 +324,7 @@ def design_to_toml(design: Design, *, comment: str = "") -> str:
     data["values"] = dict(design.values)
     if design.labels:
         data["labels"] = dict(design.labels)
-    data["fill"] = {"kind": design.fill.kind, "wall_mm": design.fill.wall_mm, "infill": design.fill.infill}
+    data["fill"] = design.fill.to_mapping()
     if design.physics:
         data["physics"] = dict(design.physics)
     header = "".join(f"# {line}\n" for line in comment.splitlines())

@@ -547,9 +547,7 @@ class RestBasins:
         edge, other, crosses = table[..., 0], table[..., 1], table[..., 2].astype(bool)
         away = vertices[:, None, :] - vertices[other]
         away /= np.linalg.norm(away, axis=2)[..., None]
-        return cls(
-            vertices, other, away, crosses, angles[edge], axis[edge], feet[edge], faces[edge], barriers
-        )
+        return cls(vertices, other, away, crosses, angles[edge], axis[edge], feet[edge], faces[edge], barriers)
 
     #: Cells along each edge of the cube map behind :meth:`lookup`.
     LOOKUP_CELLS = 64

@@ -112,7 +112,7 @@ class Problem:
             poly = _polyhedron(design, params)
         except DesignError:
             return INVALID, np.full(len(design.support), np.nan), np.full(len(design.values), -np.inf)
-        center = mass_properties(poly, design.fill, mm_per_unit=design.mm_per_unit).center
+        center = mass_properties(poly, design.fill, mm_per_unit=design.mm_per_unit, tabs=self._tabs).center
         margins = face_margins(poly, center)
         probs = MODELS[self.model](poly, center)
         values = np.bincount(self._value_index, weights=probs, minlength=len(design.support))
@@ -128,6 +128,16 @@ class Problem:
         """True if no two resting faces put the same face on top (unless the design sets its text)."""
         tops = [u for u in up_faces(poly) if u is not None and poly.names[u] not in self.design.labels]
         return len(tops) == len(set(tops))
+
+    @cached_property
+    def _tabs(self):
+        """A paper die's glue tabs: those of the start design's net, carried to every candidate."""
+        fill = self.design.fill
+        if fill.kind != "paper" or not fill.tabs:
+            return None
+        from .bodies import tab_shapes
+
+        return tab_shapes(self.design.polyhedron, self.design.mm_per_unit, fill.tab_mm)
 
     @cached_property
     def _value_index(self) -> np.ndarray:

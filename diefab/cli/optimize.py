@@ -10,14 +10,17 @@ import numpy as np
 
 from ..files import atomic_write, ensure_dir
 from .common import (
+    apply_fill,
     console,
     design_argument,
     emit_json,
+    fill_options,
     free_parameters,
     get_design,
     json_option,
     note_fast_fill,
     out_option,
+    pop_fill,
     simulation_options,
     values_dict,
 )
@@ -49,6 +52,7 @@ from .common import (
 )
 @click.option("--objective", type=click.Choice(["eq2", "tvd", "jsd"]), default="eq2", show_default=True)
 @click.option("--name", default=None, help="Name of the optimized design (default DESIGN-MODEL-opt).")
+@fill_options("paper", "print")
 @simulation_options
 @out_option
 @json_option
@@ -64,10 +68,11 @@ def optimize(ctx, design, params, model, target, seed, min_margin, starts, free,
     from ..design import design_to_toml
     from ..optimize import optimize_design
 
+    fill = pop_fill(sim)
     if model == "simulation":
         return optimize_simulation(ctx, design, params, target, seed, min_margin, starts, free, objective, name,
-                                   out_dir, as_json, **sim)  # fmt: skip
-    d = get_design(design, params, target)
+                                   out_dir, as_json, fill=fill, **sim)  # fmt: skip
+    d = apply_fill(get_design(design, params, target), **fill)
     if not np.isfinite(min_margin) or min_margin < 0:
         raise click.BadParameter(f"{min_margin} must be a non-negative number", param_hint="--min-margin")
     names = free_parameters(d, free)
@@ -170,7 +175,7 @@ def _simulation_view(spec, budget_s: float, history):
 
 def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, free, objective, name, out_dir,
                         as_json, sims_per_eval, max_sims_per_eval, budget, resume, method, start_model, sigma,
-                        max_evals, workers, scheduler) -> None:  # fmt: skip
+                        max_evals, workers, scheduler, fill=None) -> None:  # fmt: skip
     """``diefab optimize DESIGN --model simulation``: see :mod:`diefab.simopt`."""
     from ..design import design_to_toml
     from ..families import family
@@ -191,7 +196,7 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         raise click.BadParameter(f"{objective!r}: a simulation run minimizes eq2 or tvd", param_hint="--objective")
     if not np.isfinite(min_margin) or min_margin < 0:
         raise click.BadParameter(f"{min_margin} must be a non-negative number", param_hint="--min-margin")
-    d = get_design(design, params, target)
+    d = apply_fill(get_design(design, params, target), **(fill or {}))
     d.check_stable(0.0)
     warning = None
     if resume is not None:

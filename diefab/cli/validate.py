@@ -8,7 +8,19 @@ from pathlib import Path
 import click
 
 from ..design import format_value
-from .common import console, design_argument, emit_json, get_design, heading, json_option, physics_options, values_dict
+from .common import (
+    apply_fill,
+    console,
+    design_argument,
+    emit_json,
+    fill_options,
+    get_design,
+    heading,
+    json_option,
+    physics_options,
+    pop_fill,
+    values_dict,
+)
 
 
 @click.command()
@@ -19,16 +31,13 @@ from .common import console, design_argument, emit_json, get_design, heading, js
 @click.option("--scheduler", default=None, metavar="ADDRESS", help="Run on this Dask scheduler (tcp://host:8786).")
 @click.option("--plot", "plot_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Write a bar chart to FILE (.png or .svg).")  # fmt: skip
-@click.option(
-    "--fill", type=click.Choice(["solid", "shell", "print"]), default=None, help="Override the design's fill."
-)
+@fill_options("paper", "print")
 @click.option("--target", default=None, help="Override the design's target distribution.")
 @physics_options
 @json_option
-def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, target, as_json, **physics) -> None:
+def validate(design, params, sims, seed, workers, scheduler, plot_file, target, as_json, **physics) -> None:
     """Drop DESIGN many times in pybullet and test the counts against its target."""
     import os
-    from dataclasses import replace
 
     from ..errors import PhysicsError
     from ..files import atomic_write, ensure_dir
@@ -36,9 +45,8 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, fill, ta
     from ..physics import PhysicsSettings, SimulationInterrupted, plot_validation, simulate
     from ..stats import goodness_of_fit
 
-    d = get_design(design, params, target)
-    if fill:
-        d = replace(d, fill=replace(d.fill, kind=fill))
+    fill = pop_fill(physics)
+    d = apply_fill(get_design(design, params, target), **fill)
     settings = PhysicsSettings.from_mapping(d.physics, **physics)
     if plot_file is not None:
         if plot_file.suffix.lower() not in (".png", ".svg"):
