@@ -75,8 +75,17 @@ def solid_label_masses(solid: Solid) -> tuple[LabelMass, ...]:
     depth, emboss = solid.report["depth_mm"], solid.report["emboss"]
     return tuple(
         LabelMass(
-            poly.face_index(lb.face), lb.area_mm2, np.asarray(lb.centroid_mm), np.asarray(lb.normal), depth, emboss
-        )
+            poly.face_index(lb.face),
+            lb.area_mm2,
+            np.asarray(lb.centroid_mm),
+            np.asarray(lb.normal),
+            depth,
+            emboss,
+            lb.outline,
+            np.asarray(lb.origin_mm),
+            np.asarray(lb.baseline),
+            np.asarray(lb.up),
+        )  # fmt: skip
         for lb in solid.labels
     )
 

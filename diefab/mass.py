@@ -107,6 +107,13 @@ class Fill:
     wall_mm : float, optional
         Print: side-wall thickness, mm, overriding ``perimeters`` lines
         (default: perimeters x line spacing).
+    solid_below_mm2 : float
+        Print: a layer whose infill region is smaller than this (mm²) is
+        filled solid, [0, 10000] (PrusaSlicer's ``solid_infill_below_area``).
+    skin_margin_mm : float
+        Print: how far the solid layers next to an engraving reach into the
+        infill beyond the text, mm, [0, 50] (PrusaSlicer widens top and
+        bottom surfaces by 3 mm).
     labels : bool
         Print: include the engraved labels in a design's body.
     """
@@ -124,6 +131,8 @@ class Fill:
     bottom_layers: int = 4
     infill: float = 0.15
     wall_mm: float | None = None
+    solid_below_mm2: float = 70.0
+    skin_margin_mm: float = 3.0
     labels: bool = True
 
     def __post_init__(self) -> None:
@@ -145,6 +154,8 @@ class Fill:
         _number("infill", self.infill, 0, 1, "", lo_open=False)
         if self.wall_mm is not None:
             _number("wall_mm", self.wall_mm, 0, 50, "mm")
+        _number("solid_below_mm2", self.solid_below_mm2, 0, 10000, "mm²", lo_open=False)
+        _number("skin_margin_mm", self.skin_margin_mm, 0, 50, "mm", lo_open=False)
 
     @classmethod
     def from_mapping(cls, data, source: str = "[fill]") -> Fill:
@@ -164,7 +175,7 @@ class Fill:
             "shell": (),
             "paper": ("card_g_m2", "card_mm", "tabs", "tab_mm", "glue_g_m2"),
             "print": ("nozzle_mm", "perimeters", "layer_mm", "top_layers", "bottom_layers", "infill", "wall_mm",
-                      "labels"),
+                      "solid_below_mm2", "skin_margin_mm", "labels"),
         }[self.kind]  # fmt: skip
         return {"kind": self.kind, **{k: getattr(self, k) for k in keys if getattr(self, k) is not None}}
 
@@ -225,7 +236,10 @@ class LabelMass:
 
     area_mm2 : text area; centroid_mm : (3,) its centroid on the face;
     normal : (3,) the face's outward normal; face : index of the face;
-    depth_mm : engraving depth or embossing height.
+    depth_mm : engraving depth or embossing height.  Optionally the text's
+    outline (shapely, face coordinates x along `baseline`, y along `up`,
+    from `origin_mm`), which gives the footprint of the walls that follow
+    the engraving; without it they follow the text's own area.
     """
 
     face: int
@@ -234,6 +248,18 @@ class LabelMass:
     normal: np.ndarray
     depth_mm: float
     emboss: bool = False
+    outline: object = None
+    origin_mm: np.ndarray | None = None
+    baseline: np.ndarray | None = None
+    up: np.ndarray | None = None
+
+    def footprint(self, grow_mm: float) -> tuple[float, np.ndarray]:
+        """Area (mm²) and centroid (mm, on the face) of the text grown by `grow_mm`."""
+        if self.outline is None or grow_mm <= 0:
+            return self.area_mm2, np.asarray(self.centroid_mm, dtype=float)
+        grown = self.outline.buffer(grow_mm)
+        c = grown.centroid
+        return float(grown.area), self.origin_mm + c.x * self.baseline + c.y * self.up
 
 
 @dataclass(frozen=True, eq=False)
@@ -302,14 +328,16 @@ def inset(poly: Polyhedron, distance: float | np.ndarray) -> Polyhedron | None:
 
     None if nothing is left.
     """
+    offsets = poly.offsets - np.broadcast_to(np.asarray(distance, dtype=float), poly.offsets.shape)
+    return _halfspace_body(poly.normals, offsets, float(np.ptp(poly.vertices, axis=0).max()))
+
+
+def _halfspace_body(normals: np.ndarray, offsets: np.ndarray, size: float) -> Polyhedron | None:
+    """The convex body {x : normals @ x <= offsets}, or None if it is empty or flat."""
     from scipy.optimize import linprog
     from scipy.spatial import HalfspaceIntersection, QhullError
 
-    normals, offsets = (
-        poly.normals,
-        poly.offsets - np.broadcast_to(np.asarray(distance, dtype=float), poly.offsets.shape),
-    )
-    # Chebyshev centre: the point deepest inside the shrunk half-spaces
+    # Chebyshev centre: the point deepest inside the half-spaces
     res = linprog(
         c=[0, 0, 0, -1],
         A_ub=np.column_stack([normals, np.ones(len(normals))]),
@@ -317,13 +345,37 @@ def inset(poly: Polyhedron, distance: float | np.ndarray) -> Polyhedron | None:
         bounds=[(None, None)] * 3 + [(0, None)],
         method="highs",
     )
-    if not res.success or res.x[3] <= tol.LENGTH * max(1.0, float(np.ptp(poly.vertices, axis=0).max())):
+    if not res.success or res.x[3] <= tol.LENGTH * max(1.0, size):
         return None
     try:
         hs = HalfspaceIntersection(np.column_stack([normals, -offsets]), res.x[:3])
     except QhullError:
         return None
     return Polyhedron.from_points(hs.intersections, strict=False)
+
+
+def _section_areas(poly: Polyhedron, up: np.ndarray, heights: np.ndarray) -> np.ndarray:
+    """(k,) float: area of the cross-section of convex `poly` by the plane x·up = h, for each height."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    h = poly.vertices @ up
+    a, b = poly.vertices[poly.edges[:, 0]], poly.vertices[poly.edges[:, 1]]
+    ha, hb = h[poly.edges[:, 0]], h[poly.edges[:, 1]]
+    e1 = np.cross(up, [1.0, 0.0, 0.0] if abs(up[0]) < 0.9 else [0.0, 1.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(up, e1)
+    out = np.zeros(len(heights))
+    for i, z in enumerate(heights):
+        cross = (np.minimum(ha, hb) <= z) & (np.maximum(ha, hb) >= z) & (ha != hb)
+        t = (z - ha[cross]) / (hb[cross] - ha[cross])
+        pts = a[cross] + t[:, None] * (b[cross] - a[cross])
+        if len(pts) < 3:
+            continue
+        try:
+            out[i] = ConvexHull(np.column_stack([pts @ e1, pts @ e2])).volume
+        except QhullError:  # a degenerate (flat) section
+            continue
+    return out
 
 
 # ----------------------------------------------------------------------
@@ -384,6 +436,35 @@ def wall_depths(poly: Polyhedron, fill: Fill, mm_per_unit: float, bed: int) -> n
     return np.maximum(sides, skin) / mm_per_unit
 
 
+def _small_layers(poly: Polyhedron, core: Polyhedron, fill: Fill, mm_per_unit: float, bed: int) -> list[Polyhedron]:
+    """The parts of the core in layers whose infill region is smaller than ``fill.solid_below_mm2``.
+
+    A slicer fills those layers solid.  The core is convex, so the square
+    root of its section area is concave in height: the small layers are a
+    run at the bottom and a run at the top, whole layers counted from the bed.
+    """
+    if fill.solid_below_mm2 == 0:
+        return []
+    up = -poly.normals[bed]
+    base = poly.offsets[bed] * -1  # height of the bed plane along `up`
+    layer = fill.layer_mm / mm_per_unit
+    h = core.vertices @ up
+    first, last = int(np.floor((h.min() - base) / layer)), int(np.ceil((h.max() - base) / layer))
+    index = np.arange(first, last)
+    mids = base + (index + 0.5) * layer
+    small = _section_areas(core, up, mids) * mm_per_unit**2 < fill.solid_below_mm2
+    if small.all():
+        return [core]
+    big = np.flatnonzero(~small)
+    size = float(np.ptp(core.vertices, axis=0).max())
+    parts = []
+    for normal, offset in ((up, base + index[big[0]] * layer), (-up, -(base + (index[big[-1]] + 1) * layer))):
+        part = _halfspace_body(np.vstack([core.normals, normal]), np.append(core.offsets, offset), size)
+        if part is not None:
+            parts.append(part)
+    return parts
+
+
 def _print_moments(
     poly: Polyhedron, fill: Fill, mm_per_unit: float, bed: int, labels: tuple[LabelMass, ...]
 ) -> _Moments:
@@ -395,6 +476,8 @@ def _print_moments(
     terms = [(1.0, outer)]
     if core is not None:  # otherwise the walls meet: it prints solid
         terms.append((-hollow, _solid_moments(core)))
+        for part in _small_layers(poly, core, fill, mm_per_unit, bed):  # infill there turns solid
+            terms.append((hollow, _solid_moments(part)))
     for label in labels:
         n = np.asarray(label.normal, dtype=float)
         c = np.asarray(label.centroid_mm, dtype=float) / mm_per_unit
@@ -404,8 +487,13 @@ def _print_moments(
             terms.append((1.0, _point_moments(volume, c + 0.5 * d * n)))
             continue
         terms.append((-1.0, _point_moments(volume, c - 0.5 * d * n)))  # the pocket
-        if core is not None:  # the walls follow the pocket's floor: infill turns to wall beneath it
-            terms.append((hollow, _point_moments(volume, c - (depth[label.face] + 0.5 * d) * n)))
+        # The pocket's floor and its sides are surfaces of the print too: the slicer fills the layers next
+        # to them solid, widened into the infill by the skin margin, one depth of the pocket deeper than
+        # the wall under a plain face.
+        if core is not None:
+            area, at = label.footprint(fill.skin_margin_mm)
+            wrap = area * label.depth_mm / mm_per_unit**3
+            terms.append((hollow, _point_moments(wrap, at / mm_per_unit - (depth[label.face] + 0.5 * d) * n)))
     return _combine(*terms)
 
 

@@ -58,7 +58,7 @@ def test_print_fill_interpolates_between_shell_like_and_solid():
     full = mass_properties(poly, Fill("print", wall_mm=1.0, infill=1.0), mm_per_unit=15)
     np.testing.assert_allclose(full.center, solid.center, atol=1e-12)
     assert full.mass == pytest.approx(solid.mass)
-    fill = Fill("print", wall_mm=1.0, infill=0.0)
+    fill = Fill("print", wall_mm=1.0, infill=0.0, solid_below_mm2=0.0)
     hollow = mass_properties(poly, fill, mm_per_unit=15, bed=5)
     inner = inset(poly, wall_depths(poly, fill, 15, 5))
     assert hollow.mass == pytest.approx(poly.volume - inner.volume)
@@ -160,7 +160,7 @@ def test_card_thickness_moves_no_centre_and_tabs_add_their_own_area():
 
 def test_print_walls_and_skins_of_a_cube():
     # 20 mm cube, bed face at -z: the side walls are W thick, the top and bottom T thick
-    fill = Fill("print", wall_mm=1.0, top_layers=5, bottom_layers=5, layer_mm=0.2, infill=0.0)
+    fill = Fill("print", wall_mm=1.0, top_layers=5, bottom_layers=5, layer_mm=0.2, infill=0.0, solid_below_mm2=0.0)
     bed = int(np.argmin(CUBE.normals[:, 2]))
     props = mass_properties(CUBE, fill, mm_per_unit=10, bed=bed)
     assert props.mass == pytest.approx(8 - 1.8**3)
@@ -187,3 +187,16 @@ def test_an_engraved_label_takes_material_and_pulls_the_wall_in():
         CUBE, fill, mm_per_unit=10, bed=bed, labels=(LabelMass(**{**label.__dict__, "emboss": True}),)
     )
     assert (raised.mass - plain.mass) * 1000 == pytest.approx(10.0)
+
+
+def test_small_layers_print_solid():
+    # a 20 mm cube: every layer's infill region is 18.4² = 339 mm², under a 400 mm² threshold all are solid
+    bed = int(np.argmin(CUBE.normals[:, 2]))
+    some = mass_properties(CUBE, Fill("print", infill=0.0, solid_below_mm2=300.0), mm_per_unit=10, bed=bed)
+    full = mass_properties(CUBE, Fill("print", infill=0.0, solid_below_mm2=400.0), mm_per_unit=10, bed=bed)
+    assert some.mass < 8.0 and full.mass == pytest.approx(8.0)
+    # a gem's pointed end has small sections: the threshold adds mass there, nowhere else
+    poly = gem_polyhedron({"a": 1.18, "b": 0.52, "c": 0.72, "d": 1.41})
+    plain = mass_properties(poly, Fill("print", solid_below_mm2=0.0), mm_per_unit=15, bed=4)
+    small = mass_properties(poly, Fill("print", solid_below_mm2=70.0), mm_per_unit=15, bed=4)
+    assert small.mass > plain.mass and small.center[1] < plain.center[1]

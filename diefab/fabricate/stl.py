@@ -675,7 +675,18 @@ def build_solid(
         from ..mass import LabelMass, mass_properties
 
         label_mass = tuple(
-            LabelMass(poly.face_index(lb.face), lb.area_mm2, lb.centroid_mm, lb.normal, depth_mm, emboss)
+            LabelMass(
+                poly.face_index(lb.face),
+                lb.area_mm2,
+                lb.centroid_mm,
+                lb.normal,
+                depth_mm,
+                emboss,
+                lb.outline,
+                lb.origin_mm,
+                lb.baseline,
+                lb.up,
+            )  # fmt: skip
             for lb in labels
         )
         printed = mass_properties(poly, print_fill, mm_per_unit=scale, bed=bed_index, labels=label_mass)
