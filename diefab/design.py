@@ -28,7 +28,7 @@ import numpy as np
 
 from .errors import DesignError, GeometryError
 from .families import family, gem_polyhedron
-from .geometry import Polyhedron, face_margins, up_faces
+from .geometry import Polyhedron, face_margins, resting_faces, up_faces
 from .mass import Fill, MassProperties
 from .targets import Target, parse_target
 
@@ -47,7 +47,7 @@ GEM_VALUES = {"f1": 3, "f2": 4, "f3": -3, "f4": -4, "f5": 0, "f6": 1, "f7": 2, "
 
 _KEYS = {
     "name", "description", "family", "params", "target", "values", "labels", "size_mm",
-    "fill", "physics", "vertices", "faces", "mesh",
+    "fill", "physics", "vertices", "faces", "mesh", "transitional",
 }  # fmt: skip
 
 
@@ -71,6 +71,8 @@ class Design:
         Family parameters (the gem's a, b, c, d and optional e).
     values : mapping str -> int
         Value rolled when the die rests on each face (face name -> value).
+        Only the faces the die can rest on carry a value; the others are
+        transitional.
     target : str
         Target distribution specification (see :mod:`diefab.targets`).
     labels : mapping str -> str
@@ -84,6 +86,11 @@ class Design:
         Simulation settings stored with the design (see :mod:`diefab.physics`).
     vertices, faces, mesh
         Geometry of ``convex`` and ``mesh`` designs.
+    transitional : sequence of str
+        Faces named as faces the die cannot rest on (it rolls off them).
+        They carry no value.  A face with no value is transitional whether
+        named or not, but it must really be one: a die that can rest on a
+        face needs a value for it.
     """
 
     name: str
@@ -99,6 +106,7 @@ class Design:
     vertices: tuple[tuple[float, float, float], ...] | None = None
     faces: tuple[tuple[int, ...], ...] | None = None
     mesh: Path | None = None
+    transitional: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         fam = family(self.family)
@@ -111,15 +119,24 @@ class Design:
             raise DesignError("a mesh design needs 'mesh' (a file path)")
         values = dict(self.values) or (GEM_VALUES if self.family == "gem" else {})
         names = self.polyhedron.names
-        if set(values) != set(names):
-            extra = sorted(set(values) - set(names))
-            missing = [n for n in names if n not in values]
-            what = f"face {extra[0]!r} does not exist" if extra else f"face {missing[0]!r} has no value"
-            raise DesignError(f"design {self.name!r}: values must give every face a value: {what}")
+        if isinstance(self.transitional, str) or not all(isinstance(n, str) for n in self.transitional):
+            raise DesignError(f"transitional={self.transitional!r} must be a list of face names")
+        object.__setattr__(self, "transitional", tuple(self.transitional))
+        for what, given in (("values", values), ("transitional", self.transitional)):
+            extra = sorted(set(given) - set(names))
+            if extra:
+                raise DesignError(f"design {self.name!r}: {what}: face {extra[0]!r} does not exist")
+        both = [n for n in names if n in values and n in self.transitional]
+        if both:
+            raise DesignError(f"design {self.name!r}: face {both[0]!r} is named transitional but has a value")
         for k, v in values.items():
             if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
                 raise DesignError(f"value of face {k!r} is {v!r}, not an integer")
-        object.__setattr__(self, "values", {n: int(values[n]) for n in names})
+        if not values:
+            raise DesignError(f"design {self.name!r}: values must give the faces the die can rest on a value")
+        object.__setattr__(self, "values", {n: int(values[n]) for n in names if n in values})
+        if len(values) < len(names):
+            self._check_transitional(None)
         for k, v in self.labels.items():
             if k not in names:
                 raise DesignError(f"labels: face {k!r} does not exist (faces: {', '.join(names)})")
@@ -141,6 +158,30 @@ class Design:
             return Polyhedron.from_mesh(self.mesh)
         except GeometryError as exc:
             raise DesignError(f"design {self.name!r}: {exc}") from exc
+
+    @cached_property
+    def transitional_faces(self) -> tuple[str, ...]:
+        """The faces that carry no value (the die cannot rest on them), named or detected."""
+        return tuple(n for n in self.polyhedron.names if n not in self.values)
+
+    def resting_mask(self) -> np.ndarray:
+        """(m,) bool: the faces that carry a value, in face order."""
+        return np.array([n in self.values for n in self.polyhedron.names])
+
+    def _check_transitional(self, fill: Fill | None) -> None:
+        """Raise :class:`DesignError` if the die can rest on a face that carries no value."""
+        poly = self.polyhedron
+        center = self.mass_properties(fill).center
+        resting = resting_faces(poly, center)
+        margins = face_margins(poly, center)
+        for k, name in enumerate(poly.names):
+            if name not in self.values and resting[k]:
+                how = "is named transitional" if name in self.transitional else "has no value"
+                with_fill = f" with a {fill.kind} fill" if fill is not None and fill != self.fill else ""
+                raise DesignError(
+                    f"design {self.name!r}: face {name} {how}, but the die can rest on it{with_fill} "
+                    f"(margin {margins[k]:.4g}): give it a value"
+                )
 
     @property
     def value_of(self) -> dict[str, int]:
@@ -181,7 +222,7 @@ class Design:
         out: dict[str, str] = {}
         owner: dict[str, str] = {}
         for rest, up in self.label_face.items():
-            if up is None:
+            if up is None or rest not in self.values:
                 continue
             if up in owner and up not in self.labels:
                 raise DesignError(
@@ -208,14 +249,24 @@ class Design:
         return face_margins(self.polyhedron, self.mass_properties(fill).center)
 
     def check_stable(self, min_margin: float = 0.0, fill: Fill | None = None) -> None:
-        """Raise :class:`DesignError` if the die cannot rest on some face."""
+        """Raise :class:`DesignError` if the die cannot rest on a face with a value, or can on one without.
+
+        Every face with a value needs a stability margin above `min_margin`;
+        a transitional face must have none.
+        """
         margins = self.margins(fill)
-        k = int(np.argmin(margins))
-        if margins[k] <= min_margin:
+        resting = resting_faces(self.polyhedron, self.mass_properties(fill).center)
+        mask = self.resting_mask()
+        if len(self.values) < len(mask):
+            self._check_transitional(fill)
+        worst = np.where(mask, margins, np.inf)
+        k = int(np.argmin(worst))
+        if margins[k] <= min_margin or not resting[k]:
             raise DesignError(
                 f"design {self.name!r} is unstable: the centre of mass projects "
                 f"{'outside' if margins[k] < 0 else 'onto the edge of'} face {self.polyhedron.names[k]} "
-                f"(margin {margins[k]:.4f}, need > {min_margin:g})"
+                f"(margin {margins[k]:.4f}, need > {min_margin:g}); a face the die should roll off "
+                "carries no value (list it in 'transitional')"
             )
 
     def with_params(self, **params: float) -> Design:
@@ -295,6 +346,10 @@ def parse_design(content: str, *, source: str = "<string>", base: Path | None = 
         kwargs["faces"] = tuple(tuple(f) for f in data["faces"])
     if "mesh" in data:
         kwargs["mesh"] = (base or Path.cwd()) / data["mesh"]
+    if "transitional" in data:
+        if not isinstance(data["transitional"], list):
+            raise DesignError(f"{source}: transitional must be a list of face names")
+        kwargs["transitional"] = tuple(data["transitional"])
     try:
         return Design(**kwargs, fill=fill, physics=data.get("physics", {}))
     except DesignError as exc:
@@ -322,6 +377,8 @@ def design_to_toml(design: Design, *, comment: str = "") -> str:
     if design.mesh is not None:
         data["mesh"] = str(design.mesh)
     data["values"] = dict(design.values)
+    if design.transitional:
+        data["transitional"] = list(design.transitional)
     if design.labels:
         data["labels"] = dict(design.labels)
     data["fill"] = design.fill.to_mapping()

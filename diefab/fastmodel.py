@@ -77,7 +77,7 @@ import numpy as np
 
 from .errors import DesignError
 from .families import GEM, gem_parameters
-from .geometry import Polyhedron, face_margins, solid_angles
+from .geometry import Polyhedron, face_margins, resting_faces, solid_angles
 
 __all__ = [
     "AREA_POWER",
@@ -193,9 +193,8 @@ def _topple_targets(poly: Polyhedron, center: np.ndarray, barrier: np.ndarray, a
     """(m,) int: the stable face each face ends on by quasi-static toppling (itself if stable)."""
     m = len(poly.faces)
     _, _, face, start = poly._ring
-    margins = face_margins(poly, center)
     step = np.arange(m)
-    for f in np.flatnonzero(margins < 0):
+    for f in np.flatnonzero(~resting_faces(poly, center)):
         # over the edge the centre of mass lies furthest beyond (most negative barrier)
         lo, hi = start[f], start[f + 1] if f + 1 < m else len(face)
         step[f] = across[lo + int(np.argmin(barrier[lo:hi]))]

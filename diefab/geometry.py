@@ -32,6 +32,7 @@ __all__ = [
     "Polyhedron",
     "RestBasins",
     "face_margins",
+    "resting_faces",
     "solid_angles",
     "up_faces",
 ]
@@ -427,6 +428,18 @@ def face_margins(poly: Polyhedron, point: np.ndarray) -> np.ndarray:
     return np.where(inside, distance, -distance)
 
 
+def resting_faces(poly: Polyhedron, point: np.ndarray) -> np.ndarray:
+    """(m,) bool: the faces a die with its centre of mass at `point` can rest on.
+
+    A face can hold the die when the centre of mass projects inside it by
+    more than :data:`~diefab.tolerances.REST_MARGIN` (relative to the die's
+    size); the others are **transitional**: a die put down on one rolls off
+    it.
+    """
+    scale = max(1.0, float(np.ptp(poly.vertices, axis=0).max()))
+    return face_margins(poly, point) > tol.REST_MARGIN * scale
+
+
 def up_faces(poly: Polyhedron) -> list[int | None]:
     """For each resting face, the face that points up, or None for a tie.
 
@@ -474,8 +487,13 @@ class RestBasins:
     ``h_f + barriers[f]`` can never leave it, since its centre of mass is
     never lower than ``U(d)``: the physics validator's early stop.
 
-    Only dice that can rest on every face are handled; :meth:`of` returns
-    None for the others.
+    A **transitional** face (one the die cannot rest on, see
+    :func:`resting_faces`) has an empty basin: its normal is no minimum of
+    U.  A flow that reaches it goes on as the die tips off it: about the
+    point of the face nearest to the foot of the centre of mass, toward that
+    foot, until it ends on a resting face (:attr:`targets`).  Saddles
+    between two regions that drain to the same resting face are not on any
+    basin's rim and do not count in :attr:`barriers`.
 
     Attributes
     ----------
@@ -496,7 +514,12 @@ class RestBasins:
     arc_faces : (n, k, 2) int
         The edge's two faces.
     barriers : (m,) float
-        Lowest saddle of each face's basin above its rest height.
+        Lowest saddle of each resting face's basin above its rest height
+        (infinite for the only resting face of a die, 0 for a transitional
+        face).
+    targets : (m,) int
+        The resting face the flow ends on from each face's normal (the face
+        itself when the die can rest on it).
     """
 
     vertices: np.ndarray
@@ -508,15 +531,23 @@ class RestBasins:
     arc_feet: np.ndarray
     arc_faces: np.ndarray
     barriers: np.ndarray
+    targets: np.ndarray
+
+    @property
+    def resting(self) -> np.ndarray:
+        """(m,) bool: the faces the die can rest on."""
+        return self.targets == np.arange(len(self.targets))
 
     @classmethod
-    def of(cls, poly: Polyhedron, center: np.ndarray) -> RestBasins | None:
-        """The basins of `poly` with its centre of mass at `center`, or None if it cannot rest on every face."""
+    def of(cls, poly: Polyhedron, center: np.ndarray) -> RestBasins:
+        """The basins of `poly` with its centre of mass at `center` (inside the polyhedron)."""
         center = np.asarray(center, dtype=float)
-        if face_margins(poly, center).min() <= 0:
-            return None
-        vertices = poly.vertices - center
         heights = poly.offsets - poly.normals @ center
+        if heights.min() <= 0:
+            raise GeometryError(f"the centre of mass {center.tolist()} is not inside the polyhedron")
+        resting = resting_faces(poly, center)
+        m = len(poly.faces)
+        vertices = poly.vertices - center
         edges, faces = poly.edges, poly.edge_faces
         p0, p1 = vertices[edges[:, 0]], vertices[edges[:, 1]]
         axis = p1 - p0
@@ -530,13 +561,6 @@ class RestBasins:
             return np.arctan2(np.einsum("ij,ij->i", axis, _cross(feet, n)), np.einsum("ij,ij->i", feet, n))
 
         angles = np.stack([angle(poly.normals[faces[:, 0]]), angle(poly.normals[faces[:, 1]])], axis=1)
-        valley = (t > 0) & (t < 1)
-        saddle = valley & (angles[:, 0] * angles[:, 1] < 0)  # the foot strictly inside the arc
-        barriers = np.full(len(poly.faces), np.inf)
-        for side in (0, 1):
-            np.minimum.at(barriers, faces[saddle, side], reach[saddle] - heights[faces[saddle, side]])
-        if not np.all(np.isfinite(barriers)):
-            return None  # a face with no saddle around it (a die with a single resting face)
         # per vertex, its incident edges (padded by repeating the first)
         incident: list[list[tuple[int, int, bool]]] = [[] for _ in range(len(vertices))]
         for k, (i, j) in enumerate(edges):
@@ -547,7 +571,20 @@ class RestBasins:
         edge, other, crosses = table[..., 0], table[..., 1], table[..., 2].astype(bool)
         away = vertices[:, None, :] - vertices[other]
         away /= np.linalg.norm(away, axis=2)[..., None]
-        return cls(vertices, other, away, crosses, angles[edge], axis[edge], feet[edge], faces[edge], barriers)
+        parts = (vertices, other, away, crosses, angles[edge], axis[edge], feet[edge], faces[edge])
+        # where the flow ends from each transitional face, lowest first: it only ever descends
+        targets = np.arange(m)
+        flow = cls(*parts, np.zeros(m), targets)
+        for g in sorted(np.flatnonzero(~resting), key=lambda g: heights[g]):
+            targets[g] = flow.face_of(_tipping_direction(poly, g, center))[0]
+        valley = (t > 0) & (t < 1)
+        saddle = valley & (angles[:, 0] * angles[:, 1] < 0)  # the foot strictly inside the arc
+        saddle &= targets[faces[:, 0]] != targets[faces[:, 1]]  # inside one basin it is no rim
+        barriers = np.where(resting, np.inf, 0.0)
+        for side in (0, 1):
+            ends = targets[faces[saddle, side]]
+            np.minimum.at(barriers, ends, reach[saddle] - heights[ends])
+        return cls(*parts, barriers, targets)
 
     #: Cells along each edge of the cube map behind :meth:`lookup`.
     LOOKUP_CELLS = 64
@@ -619,8 +656,27 @@ class RestBasins:
             phi = np.arctan2(np.einsum("ij,ij->i", axis, _cross(foot, x)), np.einsum("ij,ij->i", foot, x))
             ends = self.arc_angles[vl, k]
             side = np.where(phi >= 0, np.argmax(ends, axis=1), np.argmin(ends, axis=1))
-            out[live[~cross]] = self.arc_faces[vl, k, side][~cross]
+            out[live[~cross]] = self.targets[self.arc_faces[vl, k, side][~cross]]
             d[live[cross]] = x[cross]
             v[live[cross]] = self.neighbors[vl, k][cross]
             live = live[cross]
         return out
+
+
+def _tipping_direction(poly: Polyhedron, face: int, center: np.ndarray) -> np.ndarray:
+    """(1, 3): "down" (body frame) just after a die put down on transitional `face` starts to tip off it.
+
+    The die pivots about the point of the face nearest to the foot of the
+    centre of mass, so "down" turns from the face normal toward the foot.
+    """
+    n = poly.normals[face]
+    foot = center + (poly.offsets[face] - n @ center) * n
+    ring = poly.vertices[poly.faces[face]]
+    edge = np.roll(ring, -1, axis=0) - ring
+    t = np.clip(np.einsum("ij,ij->i", foot - ring, edge) / np.einsum("ij,ij->i", edge, edge), 0, 1)
+    nearest = ring + t[:, None] * edge
+    k = int(np.argmin(np.linalg.norm(nearest - foot, axis=1)))
+    toward = foot - nearest[k]
+    toward /= np.linalg.norm(toward)
+    down = n + tol.TIP * toward
+    return (down / np.linalg.norm(down))[None]

@@ -5,6 +5,9 @@ resting on each face.  ``solid-angle`` is the paper's: the solid angle each
 face subtends at the centre of mass, over 4 pi.  More models register
 themselves in :data:`MODELS`.
 
+Every model gives a transitional face (one the die cannot rest on, see
+:func:`~diefab.geometry.resting_faces`) probability 0.
+
 Examples
 --------
 >>> from diefab.design import load_design
@@ -21,7 +24,7 @@ import numpy as np
 
 from .design import Design
 from .errors import DesignError
-from .geometry import Polyhedron, solid_angles
+from .geometry import Polyhedron, RestBasins, resting_faces, solid_angles
 from .mass import Fill
 
 __all__ = ["MODELS", "face_probabilities", "solid_angle_model", "to_values", "value_probabilities"]
@@ -30,9 +33,18 @@ Model = Callable[[Polyhedron, np.ndarray], np.ndarray]
 
 
 def solid_angle_model(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
-    """(m,) float: solid angle of each face at `center` over 4 pi."""
+    """(m,) float: solid angle of each face at `center` over 4 pi.
+
+    The die first touches down on the face the downward ray from the centre
+    of mass meets.  If that face is transitional it tips off it and rolls
+    downhill; its share goes to the resting face where that quasi-static
+    flow ends (:attr:`RestBasins.targets <diefab.geometry.RestBasins>`).
+    """
     omega = solid_angles(poly, center)
-    return omega / omega.sum()
+    p = omega / omega.sum()
+    if resting_faces(poly, center).all():
+        return p
+    return np.bincount(RestBasins.of(poly, center).targets, weights=p, minlength=len(p))
 
 
 from .fastmodel import fast_model  # noqa: E402 -- calibrated against pybullet (issue 6)
@@ -54,10 +66,11 @@ def face_probabilities(design: Design, model: str = "solid-angle", fill: Fill | 
 
 
 def to_values(design: Design, face_probs: np.ndarray) -> np.ndarray:
-    """Sum face probabilities (or counts) into the design's values, increasing."""
+    """Sum face probabilities (or counts) into the design's values, increasing (transitional faces left out)."""
     index = {v: i for i, v in enumerate(design.support)}
-    which = [index[design.values[n]] for n in design.polyhedron.names]
-    return np.bincount(which, weights=face_probs, minlength=len(index))
+    names = design.polyhedron.names
+    which = [index[design.values[n]] for n in names if n in design.values]
+    return np.bincount(which, weights=np.asarray(face_probs)[design.resting_mask()], minlength=len(index))
 
 
 def value_probabilities(design: Design, model: str = "solid-angle", fill: Fill | None = None) -> np.ndarray:

@@ -255,9 +255,11 @@ class RollResult:
         """(k,) int: landed drops per value of ``design.support`` (increasing)."""
         if tuple(design.polyhedron.names) != self.faces:
             raise PhysicsError(f"design {design.name!r} has faces {design.polyhedron.names}, the result {self.faces}")
-        index = {v: i for i, v in enumerate(design.support)}
-        which = [index[design.values[name]] for name in self.faces]
-        return np.bincount(which, weights=self.face_counts, minlength=len(index)).astype(np.int64)
+        from .models import to_values
+
+        if tuple(design.polyhedron.names) != self.faces:
+            raise PhysicsError(f"design {design.name!r} has faces {design.polyhedron.names}, the result {self.faces}")
+        return to_values(design, self.face_counts).astype(np.int64)
 
     def value_probabilities(self, design: Design) -> np.ndarray:
         """(k,) float: share of the landed drops on each value."""

@@ -11,6 +11,11 @@ CONVEXITY = 1e-9
 #: Two unit normals closer than this (1 - cos) are taken as the same plane
 #: when coplanar triangles of a mesh are merged.
 COPLANAR = 1e-7
+#: Smallest stability margin, relative to the die's size, of a face the die can rest on
+#: (a face with a smaller margin is transitional).
+REST_MARGIN = 1e-9
+#: Tilt (radians) of the first step of a die tipping off a transitional face.
+TIP = 1e-6
 #: Smallest face area, edge length and volume that are not degenerate.
 AREA = 1e-12
 LENGTH = 1e-9

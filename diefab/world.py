@@ -99,10 +99,10 @@ class DieBody:
         Outward unit face normals, body frame, polyhedron face order.
     heights : (m,) float
         Distance from the centre of mass to each face plane.
-    basins : RestBasins or None
-        Which face's basin each orientation lies in and the height the centre
-        of mass must rise to leave it, body frame (None for a die that cannot
-        rest on every face: the energy rule is then off).
+    basins : RestBasins
+        Which face's basin each orientation lies in, the height the centre
+        of mass must rise to leave it and which faces the die can rest on,
+        body frame.
     mass : float
     inertia : (3,) float
         Principal moments of inertia.
@@ -115,7 +115,7 @@ class DieBody:
     vertices: np.ndarray
     normals: np.ndarray
     heights: np.ndarray
-    basins: RestBasins | None
+    basins: RestBasins
     mass: float
     inertia: np.ndarray
     rotation: np.ndarray
@@ -430,6 +430,7 @@ class World:
         else:
             ceiling = -np.inf
         cos_tol = np.cos(np.radians(s.face_tolerance))
+        resting = body.basins.resting
         half_m, half_i, normals = 0.5 * body.mass, 0.5 * body.inertia, body.normals
         half_i_min = half_i.min()
         still_speed2, still_spin2 = s.still_speed**2, s.still_spin**2
@@ -479,7 +480,8 @@ class World:
                 energy = half_m * speed2[near] + (half_i * omega * omega).sum(1) + mg * state[:, 2]
                 basin = basins.lookup(-rot[:, 2, :])
                 trapped = energy - mg * rest[basin] < limit[basin]
-            down = cos[np.arange(len(live)), face] >= cos_tol
+            # still on a face it cannot rest on, a die is toppling (or, if it stays, cocked)
+            down = (cos[np.arange(len(live)), face] >= cos_tol) & resting[face]
             landed = trapped | (down & (still_near >= settle_steps))
             cocked = ~down & (still_near >= cocked_steps)
             timeout = steps[live] >= max_steps
@@ -520,6 +522,8 @@ class World:
                     if still >= s.settle_time - 1e-12:
                         quat = p.getBasePositionAndOrientation(die, physicsClientId=cid)[1]
                         face = resting_face(self.body.normals, quat, s.face_tolerance)
+                        if face != COCKED and not self.body.basins.resting[face]:
+                            face = COCKED  # still on a transitional face: toppling, or cocked if it stays
                         if face != COCKED or still >= s.cocked_time - 1e-12:
                             outcomes[i] = face
                             break

@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from diefab.errors import GeometryError
 from diefab.families import GEM, gem_polyhedron
-from diefab.geometry import Polyhedron, RestBasins, face_margins, solid_angles, up_faces
+from diefab.geometry import Polyhedron, RestBasins, face_margins, resting_faces, solid_angles, up_faces
 
 CUBE = [[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
 OCTAHEDRON = [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]]
@@ -208,38 +208,53 @@ def test_a_face_normal_lies_in_its_own_basin():
         assert np.array_equal(basins.face_of(design.polyhedron.normals), np.arange(9))
 
 
-def test_gem_basins_follow_the_downhill_flow():
-    """Against a brute-force gradient descent of the support function on the sphere."""
-    design = _gem_design({})
-    poly, center = design.polyhedron, design.mass_properties().center
-    basins = RestBasins.of(poly, center)
+#: A gem that cannot rest on some of its faces (transitional faces).
+TIPPY = {"a": 1.0, "b": 0.5, "c": 0.2, "d": 0.3}
+
+
+def _descend(poly, center, d):
+    """Brute-force gradient descent of the support function on the sphere: the face each direction ends on."""
     vertices = poly.vertices - center
-    d = _unit(np.random.default_rng(1), 400)
     x = d.copy()
     for _ in range(4000):
         v = vertices[np.argmax(x @ vertices.T, axis=1)]
         x -= 0.002 * (v - np.einsum("ij,ij->i", v, x)[:, None] * x)
         x /= np.linalg.norm(x, axis=1)[:, None]
-    descent = np.argmax(x @ poly.normals.T, axis=1)
-    assert np.mean(basins.face_of(d) == descent) >= 0.99
+    return np.argmax(x @ poly.normals.T, axis=1)
 
 
-def test_basin_rims_never_dip_below_the_barrier():
+@pytest.mark.parametrize("params", [{}, TIPPY], ids=["stable", "transitional"])
+def test_gem_basins_follow_the_downhill_flow(params):
+    """Against a brute-force gradient descent of the support function on the sphere."""
+    poly = gem_polyhedron({**load_params(), **params})
+    center = poly.centroid
+    basins = RestBasins.of(poly, center)
+    d = _unit(np.random.default_rng(1), 400)
+    assert np.mean(basins.face_of(d) == _descend(poly, center, d)) >= 0.99
+
+
+def load_params():
+    from diefab.design import load_design
+
+    return dict(load_design("fudge-gem").params)
+
+
+@pytest.mark.parametrize("params", [{}, {"a": 1.3, "b": 0.66, "c": 0.79, "d": 0.72, "e": 0.46}, TIPPY])
+def test_basin_rims_never_dip_below_the_barrier(params):
     """Where two basins meet the centre of mass is at least the barrier above either face's rest."""
     from scipy.spatial import cKDTree
 
     rng = np.random.default_rng(2)
-    for params in ({}, {"a": 1.3, "b": 0.66, "c": 0.79, "d": 0.72, "e": 0.46}):
-        design = _gem_design(params)
-        poly, center = design.polyhedron, design.mass_properties().center
-        basins = RestBasins.of(poly, center)
-        d = _unit(rng, 60_000)
-        face = basins.face_of(d)
-        height = (d @ (poly.vertices - center).T).max(axis=1) - (poly.offsets - poly.normals @ center)[face]
-        pairs = cKDTree(d).query_pairs(0.02, output_type="ndarray")
-        rim = np.unique(pairs[face[pairs[:, 0]] != face[pairs[:, 1]]])
-        assert len(rim) > 100
-        assert np.all(height[rim] >= basins.barriers[face[rim]] * (1 - 1e-9))
+    poly = gem_polyhedron({**load_params(), **params})
+    center = poly.centroid
+    basins = RestBasins.of(poly, center)
+    d = _unit(rng, 60_000)
+    face = basins.face_of(d)
+    height = (d @ (poly.vertices - center).T).max(axis=1) - (poly.offsets - poly.normals @ center)[face]
+    pairs = cKDTree(d).query_pairs(0.02, output_type="ndarray")
+    rim = np.unique(pairs[face[pairs[:, 0]] != face[pairs[:, 1]]])
+    assert len(rim) > 100
+    assert np.all(height[rim] >= basins.barriers[face[rim]] * (1 - 1e-9))
 
 
 def test_basin_lookup_matches_the_exact_flow():
@@ -249,9 +264,23 @@ def test_basin_lookup_matches_the_exact_flow():
     assert np.array_equal(basins.lookup(d), basins.face_of(d))
 
 
-def test_basins_need_every_face_stable():
-    # a tall thin pyramid-like gem whose top cannot hold it
-    poly = gem_polyhedron({"a": 1.0, "b": 0.5, "c": 0.2, "d": 0.3})
+def test_transitional_faces_have_empty_basins_and_drain_downhill():
+    poly = gem_polyhedron(TIPPY)
     center = poly.centroid
-    assert face_margins(poly, center).min() < 0
-    assert RestBasins.of(poly, center) is None
+    resting = resting_faces(poly, center)
+    assert face_margins(poly, center).min() < 0 and resting.any() and not resting.all()
+    basins = RestBasins.of(poly, center)
+    assert np.array_equal(basins.resting, resting)
+    heights = poly.offsets - poly.normals @ center
+    for g in np.flatnonzero(~resting):
+        assert resting[basins.targets[g]] and heights[basins.targets[g]] < heights[g]
+    face = basins.face_of(_unit(np.random.default_rng(4), 20_000))
+    assert np.all(resting[face])
+    assert np.array_equal(basins.lookup(poly.normals), basins.targets)
+    assert np.all(np.isfinite(basins.barriers[resting]) | (resting.sum() == 1))
+
+
+def test_basins_need_the_center_inside():
+    cube = Polyhedron.from_points([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+    with pytest.raises(GeometryError):
+        RestBasins.of(cube, np.array([3.0, 0, 0]))

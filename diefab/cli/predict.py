@@ -57,6 +57,13 @@ def predict(design: str, params, model: str, target: str | None, as_json: bool, 
     goal = d.target_distribution.aligned(d.support)
     com = d.mass_properties(fill_model).center
     margins = d.margins(fill_model)
+    transitional = d.transitional_faces
+    rolls_to = {}
+    if transitional:
+        from ..geometry import RestBasins
+
+        targets = RestBasins.of(poly, com).targets
+        rolls_to = {n: poly.names[targets[k]] for k, n in enumerate(poly.names) if n in transitional}
     result = {
         "design": d.name,
         "model": model,
@@ -66,18 +73,22 @@ def predict(design: str, params, model: str, target: str | None, as_json: bool, 
         "faces": [
             {
                 "name": n,
-                "value": d.values[n],
-                "label_face": d.label_face[n],
+                "value": d.values.get(n),
+                "resting": n in d.values,
+                "label_face": d.label_face[n] if n in d.values else None,
                 "probability": float(p),
                 "margin": float(m),
+                **({"rolls_to": rolls_to[n]} if n in rolls_to else {}),
             }
             for n, p, m in zip(poly.names, faces, margins)
         ],
+        "transitional": list(transitional),
+        "transitional_named": list(d.transitional),
         "values": values_dict(d, values),
         "target_values": values_dict(d, goal),
         "center_of_mass": com.tolist(),
         "margins": {n: float(m) for n, m in zip(poly.names, margins)},
-        "min_margin": float(margins.min()),
+        "min_margin": float(margins[d.resting_mask()].min()),
         "objective": pearson_divergence(values, goal),
         "tvd": tvd(values, goal),
         "jsd": jsd(goal, values),
@@ -92,6 +103,8 @@ def predict(design: str, params, model: str, target: str | None, as_json: bool, 
     con.print(f"centre of mass: ({com[0]:.4f}, {com[1]:.4f}, {com[2]:.4f})  model units")
     table = Table("face", "value", "label on", "probability", "margin")
     for f in result["faces"]:
+        if not f["resting"]:
+            continue
         table.add_row(
             f["name"],
             format_value(f["value"], min(d.support) < 0),
@@ -100,6 +113,12 @@ def predict(design: str, params, model: str, target: str | None, as_json: bool, 
             f"{f['margin']:.4f}",
         )
     con.print(table)
+    if transitional:
+        named = f", {len(d.transitional)} named in the design" if d.transitional else ""
+        con.print(f"{len(transitional)} transitional faces (the die rolls off them; probability 0{named}):")
+        shown = "  ".join(f"{n}\u2192{rolls_to[n]}" for n in transitional[:40])
+        more = f"  ... ({len(transitional) - 40} more; --json lists all)" if len(transitional) > 40 else ""
+        con.print("  " + shown + more)
     table = Table("value", "predicted", "target", "difference")
     for v, p, q in zip(d.support, values, goal):
         table.add_row(str(v), f"{p:.4f}", f"{q:.4f}", f"{p - q:+.4f}")

@@ -1,0 +1,100 @@
+"""Transitional faces: faces a die cannot rest on carry no value and get probability 0 everywhere."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from diefab.design import Design, design_to_toml, parse_design
+from diefab.errors import DesignError
+from diefab.families import gem_polyhedron
+from diefab.geometry import RestBasins, resting_faces, solid_angles
+from diefab.models import MODELS, face_probabilities, value_probabilities
+
+#: A gem too flat for its girdle faces f1-f4: the die rolls off them onto f5-f9.
+TIPPY = gem_polyhedron({"a": 1.0, "b": 0.5, "c": 0.2, "d": 0.3})
+RESTING_VALUES = {"f5": 0, "f6": 1, "f7": 2, "f8": 3, "f9": 4}
+
+
+def tippy(**kwargs) -> Design:
+    args = {"values": RESTING_VALUES, "target": "binomial:4", **kwargs}
+    vertices = tuple(map(tuple, TIPPY.vertices.tolist()))
+    faces = tuple(tuple(map(int, f)) for f in TIPPY.faces)
+    return Design("tippy", "convex", vertices=vertices, faces=faces, **args)
+
+
+def test_faces_without_a_value_are_transitional_named_or_not():
+    assert tippy().transitional_faces == ("f1", "f2", "f3", "f4")
+    named = tippy(transitional=["f1", "f3"])
+    assert named.transitional_faces == ("f1", "f2", "f3", "f4") and named.transitional == ("f1", "f3")
+    named.check_stable(0.01)
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"values": {**RESTING_VALUES, "f1": 4}}, "unstable"),
+        ({"values": {k: v for k, v in RESTING_VALUES.items() if k != "f6"}}, "f6 has no value"),
+        ({"transitional": ["f6"], "values": {k: v for k, v in RESTING_VALUES.items() if k != "f6"}}, "named"),
+        ({"transitional": ["f5"]}, "has a value"),
+        ({"transitional": ["f77"]}, "does not exist"),
+        ({"transitional": "f1"}, "list"),
+    ],
+)
+def test_a_face_is_resting_or_transitional_never_both(kwargs, message):
+    with pytest.raises(DesignError, match=message):
+        tippy(**kwargs).check_stable(0.0)
+
+
+def test_transitional_round_trips_through_toml():
+    d = tippy(transitional=["f2"])
+    again = parse_design(design_to_toml(d))
+    assert again.transitional == ("f2",) and again.values == d.values
+
+
+@pytest.mark.parametrize("model", sorted(MODELS))
+def test_every_model_gives_transitional_faces_nothing(model):
+    d = tippy()
+    p = face_probabilities(d, model)
+    assert np.all(p >= 0) and p.sum() == pytest.approx(1)
+    assert np.all(p[~d.resting_mask()] == 0)
+    assert value_probabilities(d, model).sum() == pytest.approx(1)
+
+
+def test_solid_angle_of_a_transitional_face_goes_where_the_flow_ends():
+    center = TIPPY.centroid
+    omega = solid_angles(TIPPY, center) / (4 * np.pi)
+    targets = RestBasins.of(TIPPY, center).targets
+    p = MODELS["solid-angle"](TIPPY, center)
+    expected = omega.copy()
+    for g in np.flatnonzero(~resting_faces(TIPPY, center)):
+        expected[targets[g]] += expected[g]
+        expected[g] = 0
+    assert np.allclose(p, expected)
+    # the girdle faces are about as high as the top, which is the lowest rest: they tip on to it
+    assert set(targets[:4].tolist()) == {4}
+
+
+def test_a_simulated_die_never_lands_on_a_transitional_face():
+    from diefab.physics import simulate
+
+    d = tippy()
+    result = simulate(d, 120, seed=3, workers=1)
+    assert result.face_counts[:4].sum() == 0
+    assert result.value_counts(d).sum() == result.landed > 100
+
+
+def test_predict_reports_transitional_faces(run, tmp_path):
+    path = tmp_path / "tippy.toml"
+    path.write_text(design_to_toml(tippy(transitional=["f1"])))
+    code, out, err = run("predict", path, "--json")
+    assert code == 0, err
+    data = json.loads(out)
+    assert data["transitional"] == ["f1", "f2", "f3", "f4"] and data["transitional_named"] == ["f1"]
+    faces = {f["name"]: f for f in data["faces"]}
+    assert faces["f1"]["value"] is None and not faces["f1"]["resting"] and faces["f1"]["rolls_to"] == "f5"
+    assert faces["f1"]["probability"] == 0 and sum(data["values"].values()) == pytest.approx(1)
+    code, out, _ = run("predict", path)
+    assert code == 0 and "4 transitional faces" in out
