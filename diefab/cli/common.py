@@ -228,3 +228,25 @@ def apply_fill(design: Design, fill_kind: str | None = None, **settings) -> Desi
 def pop_fill(options: dict) -> dict:
     """Remove the fill options from a command's keyword arguments and return them."""
     return {k: options.pop(k) for k in ["fill_kind", *FILL_OPTIONS] if k in options}
+
+
+def paper_balance(design: Design, net, spec: str, **card):
+    """The balance of the paper die `net` makes (its own tabs; card settings from options or the design)."""
+    from ..balance import made_balance
+    from ..bodies import net_tab_shapes
+    from ..mass import mass_properties
+
+    base = design if design.fill.kind == "paper" else apply_fill(design, "paper")
+    fill = apply_fill(base, None, **card).fill
+    props = mass_properties(net.poly, fill, mm_per_unit=net.mm_per_unit, tabs=net_tab_shapes(net))
+    words = f"{fill.card_g_m2:g} g/m² card with {len(net.tabs)} glue tabs"
+    return made_balance(design, props.center, "paper", words, spec)
+
+
+def print_balance(design: Design, solid, fill, spec: str):
+    """The balance of the print of `solid` (walls, skins, infill and engraving as built)."""
+    from ..balance import made_balance
+
+    r = solid.report
+    center = np.asarray(r["center_of_mass_mm"]["printed"]) / r["mm_per_unit"]
+    return made_balance(design, center, "print", fill.describe(), spec)

@@ -8,7 +8,16 @@ import click
 
 from ..errors import DiefabError
 from ..files import atomic_write, ensure_dir
-from .common import apply_fill, design_argument, emit_json, fill_options, get_design, json_option, out_option
+from .common import (
+    apply_fill,
+    design_argument,
+    emit_json,
+    fill_options,
+    get_design,
+    json_option,
+    out_option,
+    print_balance,
+)
 
 
 @click.command("stl")
@@ -58,7 +67,10 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, formats,
     written = [str(atomic_write(out_dir / name, data)) for name, data in payloads.items()]
     for line in solid.warnings:
         click.echo(f"diefab: warning: {line}", err=True)
-    report = {"file": written[0], "files": written, **solid.report}
+    balance = print_balance(d, solid, fill, design)
+    if balance.warning:
+        click.echo(f"diefab: warning: {balance.warning}", err=True)
+    report = {"file": written[0], "files": written, **solid.report, **balance.as_json()}
     if as_json:
         emit_json(report)
         return
@@ -78,5 +90,6 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, formats,
     for key in ("sharp", "rounded", "engraved", "printed"):
         if key in r["probabilities"]:
             click.echo(f"{key:<11s} " + " ".join(f"{p:8.5f}" for p in r["probabilities"][key].values()))
+    click.echo(balance.summary())
     for path in written:
         click.echo(f"wrote {path}")
