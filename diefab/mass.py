@@ -354,6 +354,60 @@ def _halfspace_body(normals: np.ndarray, offsets: np.ndarray, size: float) -> Po
     return Polyhedron.from_points(hs.intersections, strict=False)
 
 
+@dataclass(frozen=True, eq=False)
+class _Hull:
+    """A convex body as scipy's hull of points: what the print model needs, without merging faces."""
+
+    vertices: np.ndarray
+    triangles: np.ndarray  # outward
+    normals: np.ndarray  # one plane per distinct facet
+    offsets: np.ndarray
+    edges: np.ndarray
+
+    @classmethod
+    def of(cls, points: np.ndarray) -> _Hull | None:
+        from scipy.spatial import ConvexHull, QhullError
+
+        try:
+            hull = ConvexHull(points)
+        except QhullError:
+            return None
+        v = hull.points[hull.vertices]
+        remap = np.full(len(hull.points), -1)
+        remap[hull.vertices] = np.arange(len(hull.vertices))
+        tri = remap[hull.simplices]
+        a, b, c = v[tri[:, 0]], v[tri[:, 1]], v[tri[:, 2]]
+        flip = np.einsum("ij,ij->i", _cross(b - a, c - a), hull.equations[:, :3]) < 0
+        tri[flip] = tri[flip][:, [0, 2, 1]]
+        planes = np.unique(np.round(hull.equations, 12), axis=0)
+        edges = np.unique(np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1), axis=0)
+        return cls(v, tri, planes[:, :3], -planes[:, 3], edges)
+
+
+def _halfspace_hull(normals: np.ndarray, offsets: np.ndarray, size: float, guess: np.ndarray) -> _Hull | None:
+    """:func:`_halfspace_body` as a :class:`_Hull` (no face merging: fast); `guess` may be an interior point."""
+    from scipy.optimize import linprog
+    from scipy.spatial import HalfspaceIntersection, QhullError
+
+    inside = guess
+    if np.min(offsets - normals @ guess) <= 1e-3 * size:  # not well inside: the deepest point
+        res = linprog(
+            c=[0, 0, 0, -1],
+            A_ub=np.column_stack([normals, np.ones(len(normals))]),
+            b_ub=offsets,
+            bounds=[(None, None)] * 3 + [(0, None)],
+            method="highs",
+        )
+        if not res.success or res.x[3] <= tol.LENGTH * max(1.0, size):
+            return None
+        inside = res.x[:3]
+    try:
+        hs = HalfspaceIntersection(np.column_stack([normals, -offsets]), inside)
+    except QhullError:
+        return None
+    return _Hull.of(hs.intersections)
+
+
 def _section_areas(poly: Polyhedron, up: np.ndarray, heights: np.ndarray) -> np.ndarray:
     """(k,) float: area of the cross-section of convex `poly` by the plane x·up = h, for each height."""
     from scipy.spatial import ConvexHull, QhullError
@@ -436,7 +490,7 @@ def wall_depths(poly: Polyhedron, fill: Fill, mm_per_unit: float, bed: int) -> n
     return np.maximum(sides, skin) / mm_per_unit
 
 
-def _small_layers(poly: Polyhedron, core: Polyhedron, fill: Fill, mm_per_unit: float, bed: int) -> list[Polyhedron]:
+def _small_layers(poly: Polyhedron, core: _Hull, fill: Fill, mm_per_unit: float, bed: int) -> list[_Hull]:
     """The parts of the core in layers whose infill region is smaller than ``fill.solid_below_mm2``.
 
     A slicer fills those layers solid.  The core is convex, so the square
@@ -452,17 +506,40 @@ def _small_layers(poly: Polyhedron, core: Polyhedron, fill: Fill, mm_per_unit: f
     first, last = int(np.floor((h.min() - base) / layer)), int(np.ceil((h.max() - base) / layer))
     index = np.arange(first, last)
     mids = base + (index + 0.5) * layer
-    small = _section_areas(core, up, mids) * mm_per_unit**2 < fill.solid_below_mm2
-    if small.all():
+    threshold = fill.solid_below_mm2 / mm_per_unit**2
+
+    def first_big(order: np.ndarray) -> int | None:
+        for i in order:  # the run of small layers is short: stop at the first big one
+            if _section_areas(core, up, mids[i : i + 1])[0] >= threshold:
+                return int(i)
+        return None
+
+    low = first_big(np.arange(len(index)))
+    if low is None:
         return [core]
-    big = np.flatnonzero(~small)
-    size = float(np.ptp(core.vertices, axis=0).max())
+    high = first_big(np.arange(len(index))[::-1])
+    big = np.array([low, high])
     parts = []
     for normal, offset in ((up, base + index[big[0]] * layer), (-up, -(base + (index[big[-1]] + 1) * layer))):
-        part = _halfspace_body(np.vstack([core.normals, normal]), np.append(core.offsets, offset), size)
+        part = _clip(core, normal, offset)
         if part is not None:
             parts.append(part)
     return parts
+
+
+def _clip(body: _Hull, normal: np.ndarray, offset: float) -> _Hull | None:
+    """The part of convex `body` where ``x · normal <= offset``: its vertices there and its edges' crossings."""
+    h = body.vertices @ normal - offset
+    a, b = body.edges.T
+    cross = (h[a] < 0) != (h[b] < 0)
+    t = h[a[cross]] / (h[a[cross]] - h[b[cross]])
+    points = np.vstack(
+        [
+            body.vertices[h <= 0],
+            body.vertices[a[cross]] + t[:, None] * (body.vertices[b[cross]] - body.vertices[a[cross]]),
+        ]
+    )
+    return _Hull.of(points) if len(points) >= 4 else None
 
 
 def _print_moments(
@@ -471,7 +548,9 @@ def _print_moments(
     """Full-density volume (model units³) and its moments of a print with walls, skins, infill and labels."""
     depth = wall_depths(poly, fill, mm_per_unit, bed)
     outer = _solid_moments(poly)
-    core = inset(poly, depth)
+    core = _halfspace_hull(
+        poly.normals, poly.offsets - depth, float(np.ptp(poly.vertices, axis=0).max()), poly.centroid
+    )
     hollow = 1 - fill.infill
     terms = [(1.0, outer)]
     if core is not None:  # otherwise the walls meet: it prints solid
