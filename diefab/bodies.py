@@ -92,13 +92,17 @@ def solid_label_masses(solid: Solid) -> tuple[LabelMass, ...]:
 
 @lru_cache(maxsize=64)
 def _labels_cached(key, design: Design) -> tuple[LabelMass, ...]:
+    from .errors import FabricationError
     from .fabricate.stl import build_solid
 
-    return solid_label_masses(build_solid(design, print_fill=Fill("print")))
+    try:
+        return solid_label_masses(build_solid(design, print_fill=Fill("print")))
+    except FabricationError:  # labels that do not fit are not engraved (diefab stl refuses such a die)
+        return ()
 
 
 def label_masses(design: Design) -> tuple[LabelMass, ...]:
-    """The labels ``diefab stl`` engraves on `design` by default (0.6 mm deep)."""
+    """The labels ``diefab stl`` engraves on `design` by default (0.6 mm deep); none if they do not fit."""
     if not design.label_of:
         return ()
     key = (design.polyhedron.vertices.tobytes(), design.size_mm, design.family, tuple(design.label_of.items()))
