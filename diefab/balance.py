@@ -115,7 +115,7 @@ def made_balance(design: Design, center: np.ndarray, material: str, settings: st
     goal = design.target_distribution.aligned(design.support)
     made = to_values(design, MODELS[MODEL](poly, np.asarray(center, dtype=float)))
     own = to_values(design, MODELS[MODEL](poly, design.mass_properties().center))
-    command = f"diefab optimize {spec or design.name} --fill {material} --model fast"
+    command = f"diefab optimize {spec or design.name} --fill {material} --model simulation"
     return Balance(
         model=MODEL,
         material=material,

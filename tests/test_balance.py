@@ -17,7 +17,7 @@ def test_a_symmetric_die_stays_balanced_and_a_shifted_centre_warns():
     assert fine.predicted_tvd == pytest.approx(0.0, abs=1e-12) and fine.warning is None
     off = made_balance(d6, d6.polyhedron.centroid + [0.0, 0.0, 0.3], "print", "defaults", "d6")
     assert off.predicted_tvd > off.design_tvd + TVD_SLACK
-    assert "diefab optimize d6 --fill print --model fast" in off.warning
+    assert "diefab optimize d6 --fill print --model simulation" in off.warning
     assert f"TVD {off.predicted_tvd:.3f}" in off.warning and "fast model" in off.warning
     assert sum(off.predicted.values()) == pytest.approx(1.0)
 
