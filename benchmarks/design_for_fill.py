@@ -52,14 +52,18 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=None)
     ap.add_argument("--min-margin", type=float, default=0.05)
     ap.add_argument("--out", type=Path, default=Path("templates"))
+    ap.add_argument("--start", type=Path, default=None, help="continue from this design file (skip the fast optimum)")
     args = ap.parse_args()
 
     base = load_design("fudge-gem-sim")
     design = replace(base, name=f"fudge-gem-{args.fill}", fill=Fill(args.fill))
     goal = design.target_distribution.aligned(design.support)
     t0 = time.perf_counter()
-    design = optimize_design(design, model="fast", min_margin=args.min_margin, starts=6, seed=0).design
-    print(f"fast optimum for {design.fill.describe()}: "
+    if args.start is not None:
+        design = replace(design, params=load_design(args.start).params)
+    else:
+        design = optimize_design(design, model="fast", min_margin=args.min_margin, starts=6, seed=0).design
+    print(f"start for {design.fill.describe()}: "
           + " ".join(f"{k}={v:.4f}" for k, v in design.params.items()), flush=True)  # fmt: skip
     correction = np.zeros(len(design.polyhedron.faces))
     history = []
@@ -93,8 +97,11 @@ def main() -> None:
         design.with_params(**best_params),
         description=f"4dF gem designed for {design.fill.describe()} (fast model corrected by simulation)",
     )
-    comment = (f"Written by: python benchmarks/design_for_fill.py --fill {args.fill} --rounds {args.rounds} "
-               f"--drops {args.drops} --seed {args.seed}\nsimulated TVD {best_tvd:.4f} in its round")  # fmt: skip
+    start = f" --start {args.start}" if args.start else ""
+    comment = (
+        f"Written by: python benchmarks/design_for_fill.py --fill {args.fill} --rounds {args.rounds} "
+        f"--drops {args.drops} --seed {args.seed}{start}\nsimulated TVD {best_tvd:.4f} in its round"
+    )
     path = args.out / f"{final.name}.toml"
     path.write_text(design_to_toml(final, comment=comment), encoding="utf-8")
     print(f"wrote {path} (the round with the lowest simulated TVD, {best_tvd:.4f})")
