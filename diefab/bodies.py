@@ -72,7 +72,7 @@ def tab_shapes(poly: Polyhedron, mm_per_unit: float, tab_mm: float) -> tuple[Tab
 def solid_label_masses(solid: Solid) -> tuple[LabelMass, ...]:
     """The labels of a built solid, as :class:`~diefab.mass.LabelMass` (mm, the die's coordinates)."""
     poly = solid.design.polyhedron
-    depth, emboss = solid.report["depth_mm"], solid.report["emboss"]
+    depth, raised = solid.report["depth_mm"], set(solid.report.get("embossed", ()))
     return tuple(
         LabelMass(
             poly.face_index(lb.face),
@@ -80,7 +80,7 @@ def solid_label_masses(solid: Solid) -> tuple[LabelMass, ...]:
             np.asarray(lb.centroid_mm),
             np.asarray(lb.normal),
             depth,
-            emboss,
+            lb.face in raised,
             lb.outline,
             np.asarray(lb.origin_mm),
             np.asarray(lb.baseline),

@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from . import tolerances as tol
 from .errors import DesignError, GeometryError
 from .families import family, gem_polyhedron
 from .geometry import Polyhedron, face_margins, resting_faces, up_faces
@@ -78,9 +79,12 @@ class Design:
     labels : mapping str -> str
         Overrides of the computed label text, keyed by the face that carries it.
     size_mm : float
-        Physical size: the length that measures 2 model units along z (the
-        gem's girdle short side; for ``convex``/``mesh`` the largest side of
-        the bounding box).
+        Physical size as dice makers measure it (:attr:`size_note`): the
+        gem's girdle short side (2 model units along its z); for ``convex``
+        and ``mesh`` dice, face to face when every face has a parallel
+        opposite (a d6, d8, d20: the widest such pair), else the largest
+        distance between two vertices (a d4's edge).  It never depends on
+        how the vertices are rotated.
     fill : Fill
     physics : mapping
         Simulation settings stored with the design (see :mod:`diefab.physics`).
@@ -200,9 +204,12 @@ class Design:
     @cached_property
     def mm_per_unit(self) -> float:
         """Millimetres per model unit."""
-        if self.family == "gem":
-            return self.size_mm / 2.0
-        return self.size_mm / float(np.ptp(self.polyhedron.vertices, axis=0).max())
+        return self.size_mm / reference_length(self)[0]
+
+    @property
+    def size_note(self) -> str:
+        """What ``size_mm`` measures on this die, in words."""
+        return reference_length(self)[1]
 
     @cached_property
     def label_face(self) -> dict[str, str | None]:
@@ -277,6 +284,24 @@ class Design:
         return replace(self, target=target)
 
 
+def reference_length(design: Design) -> tuple[float, str]:
+    """The length ``size_mm`` measures, model units, and its name.
+
+    >>> reference_length(load_design("d6"))
+    (2.0, 'face to face')
+    """
+    if design.family == "gem":
+        return 2.0, "girdle short side"
+    poly = design.polyhedron
+    cos = poly.normals @ poly.normals.T
+    opposite = np.argmin(cos, axis=1)
+    if np.all(cos[np.arange(len(cos)), opposite] < -1 + tol.COPLANAR):
+        return float((poly.offsets + poly.offsets[opposite]).max()), "face to face"
+    from scipy.spatial.distance import pdist
+
+    return float(pdist(poly.vertices).max()), "largest vertex-to-vertex distance"
+
+
 # ----------------------------------------------------------------------
 # templates and TOML
 
@@ -346,6 +371,12 @@ def parse_design(content: str, *, source: str = "<string>", base: Path | None = 
         kwargs["faces"] = tuple(tuple(f) for f in data["faces"])
     if "mesh" in data:
         kwargs["mesh"] = (base or Path.cwd()) / data["mesh"]
+    if isinstance(data.get("labels"), dict) and base is not None:
+        # an SVG symbol's file is found beside the design file, as a mesh is
+        kwargs["labels"] = {
+            face: f"svg:{base / text[4:].strip()}" if isinstance(text, str) and text.startswith("svg:") else text
+            for face, text in data["labels"].items()
+        }
     if "transitional" in data:
         if not isinstance(data["transitional"], list):
             raise DesignError(f"{source}: transitional must be a list of face names")

@@ -598,7 +598,9 @@ def plot_validation(design: Design, result: RollResult, *, fmt: str = "png", alp
            label=f"simulated ({result.landed} drops, {1 - alpha:.0%} simultaneous CI)")  # fmt: skip
     ax.bar(x, target, w, color="#9e9e9e", label=f"target {design.target}")
     ax.bar(x + w, model, w, color="#e5a04b", label="solid-angle model")
-    ax.set_xticks(x, [str(v) for v in values])
+    from .design import format_value
+
+    ax.set_xticks(x, [format_value(int(v), min(values) < 0) for v in values])
     ax.set_xlabel("value")
     ax.set_ylabel("probability")
     extra = f", {result.cocked} cocked, {result.unsettled} unsettled" if result.cocked or result.unsettled else ""

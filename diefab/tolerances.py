@@ -27,8 +27,6 @@ TIE = 1e-9
 #: Relative difference in area or volume between a mesh and its convex hull
 #: below which the mesh counts as convex.
 MESH_REL = 1e-6
-#: Distance (mm) within which a mesh vertex lies on a face plane of the die (STL flat faces).
-STL_PLANE_MM = 1e-6
 #: Largest relative difference between an STL's volume and uncut volume ∓ text area × depth.
 STL_VOLUME_REL = 0.005
 #: Paper nets (mm): two flat polygons overlapping by no more than this along

@@ -7,6 +7,7 @@ import shutil
 import subprocess
 import xml.etree.ElementTree as ET
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,6 +17,8 @@ from diefab.fabricate.net import design_net, render_net
 from diefab.fabricate.unfold import PAGES, parse_page, unfold
 
 SVG = "{http://www.w3.org/2000/svg}"
+DESIGN_DIR = Path(__file__).resolve().parent.parent / "templates"
+INK = "{http://www.inkscape.org/namespaces/inkscape}"
 OVERLAP_MM2 = 1e-6
 
 
@@ -64,8 +67,15 @@ def test_svg_is_true_scale_mm(made):
     w, h = root.get("width"), root.get("height")
     assert w.endswith("mm") and h.endswith("mm")
     assert root.get("viewBox").split() == ["0", "0", w[:-2], h[:-2]]
-    for group in ("cut", "fold", "tabs", "labels"):
-        assert root.find(f".//{SVG}g[@id='{group}']") is not None
+    for group in ("faces", "tabs", "labels", "info"):
+        assert root.find(f".//{SVG}g[@id='print']//{SVG}g[@id='{group}']") is not None
+    layers = {g.get(f"{INK}label"): g for g in root.iter(f"{SVG}g") if g.get(f"{INK}groupmode") == "layer"}
+    assert sorted(layers) == ["cut", "print", "score"]
+    # cut and score differ in colour as well as dash; nothing but the outlines is on the cut layer
+    assert layers["cut"].get("stroke") != layers["score"].get("stroke")
+    assert layers["score"].get("stroke-dasharray") and not layers["cut"].get("stroke-dasharray")
+    assert {el.tag for el in layers["cut"]} == {f"{SVG}path"}
+    assert not root.findall(f".//{SVG}text")  # text is outlines: no font needed
 
 
 def test_edge_lengths_and_area_survive_unfolding(made):
@@ -113,7 +123,7 @@ def test_one_tab_per_cut_edge_and_folds_per_piece(made):
         folds = [e for e in net.fold_edges if set(poly.edge_faces[e].tolist()) <= members]
         assert len(folds) == len(members) - 1
     # every tab's letter is also printed on the face across its edge
-    labels = [t.text for t in root.find(f".//{SVG}g[@id='labels']").iter(f"{SVG}text")]
+    labels = [t.get("data-text") for t in root.find(f".//{SVG}g[@id='labels']").iter(f"{SVG}path")]
     for t in net.tabs:
         assert labels.count(t.label) >= 2
 
@@ -130,7 +140,8 @@ def test_tabs_are_narrow_trapezoids(made):
 
 def test_face_texts_are_the_design_labels(made):
     design, net, root = made
-    texts = [t.text for t in root.find(f".//{SVG}g[@id='labels']").iter(f"{SVG}text") if t.get("class") == "face"]
+    paths = root.find(f".//{SVG}g[@id='labels']").iter(f"{SVG}path")
+    texts = [t.get("data-text") for t in paths if t.get("class") == "face"]
     assert sorted(texts) == sorted(design.label_of.values())
 
 
@@ -236,3 +247,238 @@ def test_size_error_names_a_size_that_works():
         design_net(design, size_mm=400)
     largest = float(re.search(r"fits is ([\d.]+) mm", str(exc.value)).group(1))
     assert design_net(replace(design, size_mm=largest)).n_pieces >= 1
+
+
+# ----------------------------------------------------------------------
+# labels like a real die, cutting machines, pages
+
+
+def sheets_of(design, net, **kwargs):
+    from diefab.fabricate.labels import design_axis
+    from diefab.fabricate.net import footer_texts
+    from diefab.fabricate.sheet import layout_sheets, plan_footer
+    from diefab.fabricate.unfold import pack_copies
+
+    plan = plan_footer(net.page.width, net.page.margin, *footer_texts(design, design.size_mm))
+    values = [f for f in design.label_of if f not in design.labels]
+    copies = kwargs.pop("copies", 1)
+    return layout_sheets(
+        pack_copies(net, copies), labels=design.label_of, axis=design_axis(design), plan=plan, values=values, **kwargs
+    )
+
+
+def _to_frame(design, net, k):
+    """Affine map (page -> die frame of face k, mm), fitted from the face's corners alone."""
+    from diefab.fabricate.labels import design_axis, face_frame
+
+    poly = design.polyhedron
+    ring = poly.vertices[poly.faces[k]] * net.mm_per_unit
+    u, v = face_frame(ring, poly.normals[k], design_axis(design))
+    origin = ring.mean(axis=0)
+    want = np.column_stack([(ring - origin) @ u, (ring - origin) @ v])
+    page = np.column_stack([net.faces[k], np.ones(len(ring))])
+    m, *_ = np.linalg.lstsq(page, want, rcond=None)
+    return m
+
+
+def _apply(shape, m):
+    from shapely import affinity
+
+    return affinity.affine_transform(shape, [m[0, 0], m[1, 0], m[0, 1], m[1, 1], m[2, 0], m[2, 1]])
+
+
+def _normalised(shape):
+    from shapely import affinity
+
+    x0, y0, x1, y1 = shape.bounds
+    s = 1 / (y1 - y0)
+    return affinity.scale(affinity.translate(shape, -(x0 + x1) / 2, -(y0 + y1) / 2), s, s, origin=(0, 0))
+
+
+@pytest.mark.parametrize("name", ["fudge-gem", "d6", "d8"])
+def test_net_labels_read_as_on_the_printed_die(name):
+    """Carried back onto its face, each net label is the printed die's label: same turn, not mirrored."""
+    from diefab.fabricate.stl import build_solid
+
+    design = load_design(name)
+    net = design_net(design)
+    (sheet,) = sheets_of(design, net)
+    solid = build_solid(design)
+    printed = {label.face: label.outline for label in solid.labels}
+    faces = [t for t in sheet.texts if t.kind == "face"]
+    assert sorted(t.face for t in faces) == sorted(printed)
+    for t in faces:
+        k = design.polyhedron.face_index(t.face)
+        on_die = _normalised(_apply(t.shape, _to_frame(design, net, k)))
+        want = _normalised(printed[t.face])
+        assert on_die.symmetric_difference(want).area < 0.03 * want.area, t.face
+
+
+@pytest.mark.parametrize("name", ["fudge-gem", "d6", "d8", "random"])
+def test_value_labels_share_one_height_and_stay_inside_their_faces(name):
+    from shapely.geometry import Polygon
+
+    design = DESIGNS[name]
+    net = design_net(design)
+    sheets = sheets_of(design, net, face_names=True)
+    texts = [t for s in sheets for t in s.texts]
+    values = [t for t in texts if t.kind == "face" and t.face not in design.labels]
+    heights = {round(t.height, 9) for t in values}
+    assert len(heights) == (1 if name != "random" else 0)  # the random die's labels are all set by hand
+    assert all(h > 1.0 for h in heights)
+    for t in values:  # measured, in the die frame: the digits are that high
+        if t.text.lstrip("+\u2212").isdigit():
+            k = design.polyhedron.face_index(t.face)
+            x0, y0, x1, y1 = _apply(t.shape, _to_frame(design, net, k)).bounds
+            assert y1 - y0 == pytest.approx(t.height, rel=0.05), t.text  # a "1" is 4 % shorter than a "0"
+    face_poly = {design.polyhedron.names[k]: Polygon(p) for k, p in enumerate(net.faces)}
+    for t in texts:
+        if t.kind in ("face", "name", "edge"):
+            assert face_poly[t.face].contains(t.shape), (t.kind, t.text, t.face)
+    for t in [t for t in texts if t.kind == "tab"]:
+        tabs = [Polygon(tab.polygon) for tab in net.tabs if tab.label == t.text]
+        assert any(p.contains(t.shape) for p in tabs), t.text
+    # names never run into the value above them
+    for t in [t for t in texts if t.kind == "name"]:
+        for v in values:
+            if v.face == t.face:
+                assert not v.shape.intersects(t.shape)
+
+
+def test_real_outlines_keep_a_wide_label_inside_its_face():
+    design = replace(load_design("d6"), labels={"f2": "WWW"})
+    net = design_net(design)
+    (sheet,) = sheets_of(design, net)
+    from shapely.geometry import Polygon
+
+    (www,) = [t for t in sheet.texts if t.text == "WWW"]
+    k = design.polyhedron.face_index(www.face)
+    assert Polygon(net.faces[k]).buffer(-0.5).contains(www.shape)
+
+
+def test_marks_only_where_a_label_reads_as_another():
+    from diefab.fabricate.labels import label_shape
+    from diefab.fabricate.text import load_font, text_polygons
+
+    font = load_font()
+    d20 = [str(v) for v in range(1, 21)]
+    for text in ("10", "16", "18", "19"):
+        assert label_shape(text, font, others=d20).equals(text_polygons(text, font))
+    for text in ("6", "9"):
+        assert label_shape(text, font, others=d20).area > text_polygons(text, font).area * 1.05
+        assert not label_shape(text, font, others=d20, mark="none").equals(label_shape(text, font, others=d20))
+    assert label_shape("6", font, others=[str(v) for v in range(1, 7)]).equals(text_polygons("6", font))
+
+
+@pytest.mark.parametrize("copies", [1, 3])
+def test_one_closed_cut_outline_per_piece(made, copies):
+    from shapely.geometry import Polygon
+    from shapely.ops import unary_union
+
+    design, net, _ = made
+    svg = render_net(design, net, ("svg",), copies=copies)["svg"].decode()
+    root = ET.fromstring(svg)
+    cut = root.find(f".//{SVG}g[@id='cut']")
+    paths = cut.findall(f"{SVG}path")
+    assert len(paths) == copies * net.n_pieces
+    want = []
+    for piece in range(net.n_pieces):
+        members = np.flatnonzero(net.face_piece == piece)
+        shapes = [Polygon(net.faces[f]) for f in members]
+        shapes += [Polygon(t.polygon) for t in net.tabs if net.face_piece[t.face] == piece]
+        want.append(unary_union([s.buffer(1e-7) for s in shapes]).area)
+    got = []
+    for p in paths:
+        d = p.get("d")
+        assert d.startswith("M") and d.endswith("Z") and d.count("M") == 1  # one closed ring
+        ring = Polygon(np.array([[float(v) for v in xy.split(",")] for xy in re.split("[MLZ]", d) if xy]))
+        assert ring.is_valid
+        got.append(ring.area)
+    np.testing.assert_allclose(sorted(got), sorted(want * copies), rtol=2e-5)  # the SVG keeps 0.1 µm
+    # copies do not overlap each other
+    faces = svg_polygons(root, "faces", "data-face")
+    assert all(len(v) == copies for v in faces.values())
+
+
+@pytest.mark.parametrize("page", ["A5", "A4", "Letter", "Legal", "A3"])
+def test_footer_stays_on_the_page_and_off_the_net(page):
+    from shapely.geometry import Polygon, box
+    from shapely.ops import unary_union
+
+    design = load_design("fudge-gem")
+    size = 22.0 if page == "A5" else 30.0
+    net = design_net(design, size_mm=size, page=page)
+    pg = net.page
+    assert pg.name.upper() == page.upper()
+    sheets = sheets_of(design, net)
+    for sheet in sheets:
+        info = [t for t in sheet.texts if t.kind == "info"]
+        assert any(t.text == f"page {sheet.number}/{sheet.pages}" for t in info)
+        inside = box(pg.margin, pg.margin, pg.width - pg.margin, pg.height - pg.margin)
+        net_area = unary_union([Polygon(p) for _, p in sheet.faces] + [Polygon(p) for _, p in sheet.tabs])
+        shapes = [t.shape for t in info] + [Polygon(p).buffer(0) for style, p in sheet.legend if style == "swatch"]
+        for s in shapes:
+            assert inside.contains(s)
+            assert not s.intersects(net_area)
+        for a in range(len(info)):  # footer texts never overlap each other
+            for b in range(a + 1, len(info)):
+                assert not info[a].shape.intersects(info[b].shape), (info[a].text, info[b].text)
+
+
+def test_tab_width_zero_means_no_tabs():
+    design = load_design("d6")
+    net = design_net(design, tab_width=0)
+    assert net.tabs == ()
+    cut = set(range(len(design.polyhedron.edges))) - set(net.fold_edges.tolist())
+    assert set(net.edge_labels) == cut
+    (sheet,) = sheets_of(design, net)
+    letters = [t.text for t in sheet.texts if t.kind == "edge"]
+    assert sorted(letters) == sorted(net.edge_labels[e] for e in cut for _ in range(2))  # both sides of each cut
+
+
+def test_cli_copies_pages_and_reading(tmp_path, run):
+    code, out, err = run("net", "fudge-gem", "--out", tmp_path, "--format", "svg", "--copies", "2", "--page", "A3")
+    assert code == 0, err
+    assert "2 dice" in out and "a point up means 0" in out
+    code, out, err = run("net", "d6", "--out", tmp_path, "--format", "svg", "--size", "6", "--tab-width", "0")
+    assert code == 0 and "no glue tabs" in out and "under about 8 mm" in err
+
+
+def test_svg_symbol_on_a_face(tmp_path):
+    """A symbol from an SVG file: holes kept, y flipped, found beside the design file, same place on paper and die."""
+    pytest.importorskip("svgelements")
+    from shapely.geometry import Polygon
+
+    from diefab.fabricate.labels import symbol_shape
+
+    (tmp_path / "ring.svg").write_text(
+        '<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">'
+        '<path d="M10,10 H90 V90 H10 Z M30,30 V70 H70 V30 Z"/><rect x="0" y="92" width="8" height="8"/></svg>'
+    )
+    shape = symbol_shape(str(tmp_path / "ring.svg"))
+    assert shape.bounds[3] - shape.bounds[1] == pytest.approx(1.0)
+    assert len(getattr(shape, "geoms", [shape])) == 2
+    square = max(getattr(shape, "geoms", [shape]), key=lambda g: g.area)
+    assert len(square.interiors) == 1
+    # the small rect sits at the bottom left in the file (SVG y down): bottom left here too (y up)
+    small = min(getattr(shape, "geoms", [shape]), key=lambda g: g.area)
+    assert small.centroid.x < 0 and small.centroid.y < 0
+    text = (tmp_path / "d6.toml").write_text((DESIGN_DIR / "d6.toml").read_text() + '\n[labels]\nf2 = "svg:ring.svg"\n')
+    assert text
+    design = load_design(tmp_path / "d6.toml")
+    net = design_net(design)
+    (sheet,) = sheets_of(design, net)
+    (symbol,) = [t for t in sheet.texts if t.kind == "face" and t.text.startswith("svg:")]
+    assert Polygon(net.faces[design.polyhedron.face_index(symbol.face)]).contains(symbol.shape)
+    for bad in ("svg:missing.svg", "pips:12", "pips:x"):
+        with pytest.raises(ValueError):
+            design_net_labels = replace(design, labels={"f2": bad})
+            render_net(design_net_labels, net, ("svg",))
+
+
+def test_pips_on_the_net():
+    design = load_design("d6")
+    net = design_net(design)
+    (sheet,) = sheets_of(design, net, pips=True)
+    for t in [t for t in sheet.texts if t.kind == "face"]:
+        assert len(getattr(t.shape, "geoms", [t.shape])) == int(t.text)

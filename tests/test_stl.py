@@ -19,11 +19,12 @@ from diefab.fabricate.stl import (
     build_solid,
     cut_labels,
     flat_face_probabilities,
+    inlay_stl_bytes,
     mesh_moments,
     stl_bytes,
     threemf_bytes,
 )
-from diefab.fabricate.text import MINUS, load_font, needs_underline, stroke_width, text_polygons
+from diefab.fabricate.text import MINUS, ambiguous, load_font, needs_underline, stroke_width, text_polygons
 from diefab.geometry import solid_angles
 from diefab.mass import Fill, inset, mass_properties
 
@@ -183,8 +184,38 @@ def test_emboss_adds_the_text_volume(gem):
     solid = build_solid(gem, size_mm=30.0, emboss=True)
     r = solid.report
     assert r["genus"] == 0 and r["bodies"] == 1
-    assert r["volume_mm3"] == pytest.approx(r["uncut_volume_mm3"] + r["expected_engraved_volume_mm3"], rel=1e-4)
+    area = {label.face: label.area_mm2 for label in solid.labels}
+    raised = sum(area[f] for f in r["embossed"]) * r["depth_mm"]
+    sunk = sum(area[f] for f in r["engraved"]) * r["depth_mm"]
+    assert r["volume_mm3"] == pytest.approx(r["uncut_volume_mm3"] + raised - sunk, rel=1e-4)
     assert any("emboss" in w for w in solid.warnings)
+
+
+@pytest.mark.parametrize("name", ["d6", "fudge-gem"])
+def test_emboss_never_stands_the_print_on_raised_text(name):
+    """Every face carries a label: the bed face's is engraved, and nothing lies below the bed plane."""
+    design = load_design(name)
+    solid = build_solid(design, emboss=True)
+    bed = solid.report["bed_face"]
+    assert solid.report["engraved"] == [bed] and bed not in solid.report["embossed"]
+    z = solid.print_vertices[:, 2]
+    poly = design.polyhedron
+    k = poly.face_index(bed)
+    on_bed = np.abs(z) < 1e-6
+    assert z.min() == pytest.approx(0.0, abs=1e-9) and on_bed.sum() >= len(poly.faces[k])
+    assert any("engraved" in w for w in solid.warnings)
+
+
+def test_emboss_picks_an_unlabelled_bed_face():
+    design = replace(load_design("d6"), labels={"f2": ""})  # the face that showed 1 (resting on f1... ) is blank
+    blank = [f for f in design.polyhedron.names if f not in design.label_of]
+    solid = build_solid(design, emboss=True)
+    assert solid.report["bed_face"] in blank and solid.report["engraved"] == []
+
+
+def test_engraved_bed_face_avoids_labels():
+    design = replace(load_design("d6"), labels={"f5": ""})
+    assert build_solid(design).report["bed_face"] == "f5"
 
 
 def test_batched_and_sequential_engraving_agree(gem_solid):
@@ -228,8 +259,13 @@ def test_text_readability_rules():
     font = load_font()
     assert needs_underline("6") and needs_underline("9") and needs_underline("+6") and needs_underline("66")
     assert not needs_underline("8") and not needs_underline("69") and not needs_underline("−3")
-    six = text_polygons("6", font)
+    assert ambiguous("6", ["6", "9"]) and not ambiguous("6", ["1", "6"]) and not ambiguous("16", ["16", "19"])
+    six = text_polygons("6", font, "bar")
     assert six.bounds[3] - six.bounds[1] > 1.2  # digit height 1 plus the bar below
+    dotted = text_polygons("6", font, "period")
+    plain = text_polygons("6", font)
+    assert dotted.bounds[2] - dotted.bounds[0] > plain.bounds[2] - plain.bounds[0] + 0.1
+    assert dotted.bounds[3] - dotted.bounds[1] == pytest.approx(1.0, abs=0.01)  # the period sits on the line
     assert text_polygons("-3", font).equals(text_polygons(MINUS + "3", font))
     minus = text_polygons(MINUS, font)
     plus = text_polygons("+", font)
@@ -240,7 +276,8 @@ def test_text_readability_rules():
 
 def test_thin_strokes_warn(gem):
     solid = build_solid(gem, size_mm=12.0)
-    assert any("thinner than --min-stroke" in w for w in solid.warnings)
+    thin = [w for w in solid.warnings if "--min-stroke" in w]
+    assert len(thin) == 1  # one warning for the die, not one per face
     assert solid.watertight and solid.genus == 0
 
 
@@ -250,10 +287,31 @@ def test_3mf_package(gem_solid):
     root = ET.fromstring(zf.read("3D/3dmodel.model"))
     ns = {"m": "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"}
     assert root.get("unit") == "millimeter"
-    verts = np.array([[float(v.get(k)) for k in "xyz"] for v in root.iterfind(".//m:vertex", ns)])
-    tris = np.array([[int(t.get(k)) for k in ("v1", "v2", "v3")] for t in root.iterfind(".//m:triangle", ns)])
-    volume, _ = mesh_moments(verts, tris)
-    assert volume == pytest.approx(gem_solid.volume_mm3, rel=1e-6)
+    colors = [base.get("displaycolor") for base in root.iterfind(".//m:basematerials/m:base", ns)]
+    names = [base.get("name") for base in root.iterfind(".//m:basematerials/m:base", ns)]
+    assert names == ["body", "labels"] and colors[0] != colors[1]
+    (obj,) = root.iterfind(".//m:object", ns)
+    verts = np.array([[float(v.get(k)) for k in "xyz"] for v in obj.iterfind(".//m:vertex", ns)])
+    triangles = list(obj.iterfind(".//m:triangle", ns))
+    tris = np.array([[int(t.get(k)) for k in ("v1", "v2", "v3")] for t in triangles])
+    part = np.array([int(t.get("p1")) for t in triangles])
+    volumes = {names[k]: mesh_moments(verts, tris[part == k])[0] for k in (0, 1)}
+    # PrusaSlicer's config names the same two triangle ranges as the object's parts
+    config = ET.fromstring(zf.read("Metadata/Slic3r_PE_model.config"))
+    ranges = [(int(v.get("firstid")), int(v.get("lastid"))) for v in config.iter("volume")]
+    assert ranges == [(0, int((part == 0).sum()) - 1), (int((part == 0).sum()), len(part) - 1)]
+    # the body with empty pockets, and the labels filling them: together the uncut die
+    assert volumes["body"] == pytest.approx(gem_solid.volume_mm3, rel=1e-6)
+    assert volumes["labels"] == pytest.approx(gem_solid.report["engraved_volume_mm3"], rel=1e-3)
+    assert volumes["body"] + volumes["labels"] == pytest.approx(gem_solid.report["uncut_volume_mm3"], rel=1e-6)
+
+
+def test_inlay_stl_fills_the_pockets(gem_solid):
+    mesh = _load_stl(inlay_stl_bytes(gem_solid))
+    assert mesh.is_watertight and mesh.volume == pytest.approx(gem_solid.report["engraved_volume_mm3"], rel=1e-3)
+    body = _load_stl(stl_bytes(gem_solid))
+    # placed as on the body's print bed: inside its bounding box
+    assert np.all(mesh.bounds[0] >= body.bounds[0] - 1e-6) and np.all(mesh.bounds[1] <= body.bounds[1] + 1e-6)
 
 
 # ----------------------------------------------------------------------
@@ -358,3 +416,91 @@ def test_prusa_slicer_slices_without_repair(gem_solid, tmp_path):
     assert run.returncode == 0, log
     assert "repair" not in log.lower() and "warning" not in log.lower()
     assert gcode.is_file() and gcode.stat().st_size > 10_000
+
+
+# ----------------------------------------------------------------------
+# every die: rounding, size, pips
+
+
+def icosahedron(rotation_seed: int | None = None, size_mm: float = 22.0):
+    """A d20 (opposite faces sum to 21), optionally rotated at random."""
+    from scipy.spatial.transform import Rotation
+
+    from diefab import Design, Polyhedron
+
+    p = (1 + 5**0.5) / 2
+    v = np.array([c for a in (-1, 1) for b in (-p, p) for c in ((0, a, b), (a, b, 0), (b, 0, a))], dtype=float)
+    if rotation_seed is not None:
+        v = v @ Rotation.random(random_state=rotation_seed).as_matrix().T
+    poly = Polyhedron.from_points(v)
+    values: dict[str, int] = {}
+    for i, name in enumerate(poly.names):
+        if name not in values:
+            j = int(np.argmin(poly.normals @ poly.normals[i]))
+            values[name], values[poly.names[j]] = len(values) // 2 + 1, 20 - len(values) // 2
+    return Design(
+        "d20", "convex", vertices=tuple(map(tuple, poly.vertices.tolist())),
+        faces=tuple(tuple(int(i) for i in f) for f in poly.faces), values=values, target="uniform:20",
+        size_mm=size_mm,
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize("name", ["d8", "d20"])
+def test_rounding_works_on_faces_not_aligned_with_the_axes(name):
+    design = icosahedron(1) if name == "d20" else load_design(name)
+    solid = build_solid(design, round_mm=1.0)
+    assert solid.watertight and solid.bodies == 1 and solid.genus == 0
+    assert len(solid.labels) == len(design.polyhedron.faces)
+    flat = solid.report["flat_face_area_mm2"]
+    assert all(a > 0 for a in flat.values())
+    assert not any("no flat part" in w for w in solid.warnings)
+    # a fair die stays fair: every flat face the same area
+    assert max(flat.values()) == pytest.approx(min(flat.values()), rel=1e-6)
+
+
+def test_size_is_face_to_face_whatever_the_rotation():
+    edges = []
+    for seed in (None, 1, 2, 3):
+        design = icosahedron(seed, size_mm=22.0)
+        poly = design.polyhedron
+        width = (poly.offsets + poly.offsets[np.argmin(poly.normals @ poly.normals.T, axis=1)]).max()
+        assert width * design.mm_per_unit == pytest.approx(22.0)
+        e = poly.vertices[poly.edges]
+        edges.append(np.linalg.norm(e[:, 0] - e[:, 1], axis=1).mean() * design.mm_per_unit)
+    # a d20 22 mm across its faces has edges 22 / (phi^2 / sqrt 3) = 14.55 mm
+    assert np.allclose(edges, 22.0 * 3**0.5 / ((1 + 5**0.5) / 2) ** 2)
+    assert load_design("d6").size_note == "face to face" and load_design("fudge-gem").size_note == "girdle short side"
+
+
+def test_pips_on_a_d6():
+    solid = build_solid(load_design("d6"), pips=True)
+    assert solid.watertight and solid.genus == 0
+    for label in solid.labels:
+        parts = getattr(label.outline, "geoms", [label.outline])
+        assert len(parts) == int(label.text)  # one round pip per unit
+    # equal pips: every pip the same area
+    areas = [p.area for label in solid.labels for p in getattr(label.outline, "geoms", [label.outline])]
+    assert max(areas) == pytest.approx(min(areas), rel=1e-6)
+
+
+def test_small_die_warns():
+    solid = build_solid(load_design("d6"), size_mm=7.5, min_text_height_mm=1.0)
+    assert any("under about 8 mm" in w for w in solid.warnings)
+    assert not any("under about 8 mm" in w for w in build_solid(load_design("d6")).warnings)
+
+
+def test_cli_inlay_pips_bed_and_reading(tmp_path, run):
+    import json
+
+    code, out, err = run(
+        "stl", "d6", "--pips", "--emboss", "--inlay", "--format", "stl,3mf", "--out", tmp_path, "--json"
+    )  # fmt: skip
+    assert code == 0, err
+    report = json.loads(out)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d6-inlay.stl", "d6.3mf", "d6.stl"]
+    assert report["reading"] == "read the face on top" and report["engraved"] == [report["bed_face"]]
+    inlay = _load_stl((tmp_path / "d6-inlay.stl").read_bytes())
+    assert inlay.is_watertight and inlay.body_count == 21  # 1 + 2 + ... + 6 pips
+    code, out, err = run("stl", "fudge-gem", "--bed", "f1", "--out", tmp_path / "b")
+    assert code == 0 and "printed on face f1" in out and "a point up means 0" in out
+    assert "−4" in out and "+4" in out  # one value format: a true minus and a plus sign

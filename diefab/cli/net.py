@@ -6,31 +6,41 @@ from pathlib import Path
 
 import click
 
-from ..design import Design
 from ..errors import DiefabError
 from .common import design_argument, emit_json, fill_options, get_design, json_option, out_option, paper_balance
+
+SIZE_HELP = (
+    "Die size in mm, as dice makers measure it: face to face for dice whose faces come in parallel pairs "
+    "(d6, d8, d20), else the largest vertex-to-vertex distance (a d4's edge); the gem's girdle short side. "
+    "Default: the design's size_mm."
+)
 
 
 @click.command("net")
 @design_argument
-@click.option(
-    "--size",
-    "size_mm",
-    type=float,
-    default=None,
-    help="Die size in mm (the design's size_mm: for the gem, the girdle short side).",
-)
-@click.option("--page", default="A4", show_default=True, help="A4, Letter, A3 or WxH in mm.")
+@click.option("--size", "size_mm", type=float, default=None, help=SIZE_HELP)
+@click.option("--page", default="A4", show_default=True, help="A5, A4, A3, Letter, Legal or WxH in mm.")
 @click.option(
     "--format", "formats", default="svg,pdf", show_default=True, metavar="svg,pdf,png", help="Output formats."
 )
 @click.option("--face-names", is_flag=True, help="Also print the small face names (f1, f2, ...).")
-@click.option("--tab-width", type=float, default=5.0, show_default=True, help="Glue-tab width before narrowing, mm.")
+@click.option("--tab-width", type=float, default=5.0, show_default=True,
+              help="Glue-tab width before narrowing, mm; 0 for no tabs (edges lettered on both sides).")  # fmt: skip
+@click.option("--copies", type=click.IntRange(1, 1000), default=1, show_default=True, help="Dice on the sheet(s).")
+@click.option("--mark", type=click.Choice(["bar", "period", "none"]), default="bar", show_default=True,
+              help="Mark on a label that reads as another label of the die upside down (6 and 9).")  # fmt: skip
+@click.option("--pips", is_flag=True, help="Draw values 1 to 9 as pips.")
 @fill_options("paper", kind=False)
 @out_option
 @json_option
-def net(design, params, size_mm, page, formats, face_names, tab_width, out_dir, as_json, **card) -> None:  # fmt: skip
-    """Unfolded, labelled, true-scale paper net of DESIGN with glue tabs (SVG/PDF/PNG)."""
+def net(design, params, size_mm, page, formats, face_names, tab_width, copies, mark, pips, out_dir, as_json,
+        **card) -> None:  # fmt: skip
+    """Unfolded, labelled, true-scale paper net of DESIGN with glue tabs (SVG/PDF/PNG).
+
+    The SVG has Inkscape layers print, score (blue, dashed) and cut (red, one
+    closed outline per piece) for cutting machines; all text is outlines.
+    """
+    from ..fabricate.labels import reading_note, small_die_warning
     from ..fabricate.net import design_net, parse_formats, render_net
     from ..fabricate.unfold import parse_page
     from ..files import atomic_write, ensure_dir
@@ -38,9 +48,11 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, out_dir, 
     kinds = parse_formats(formats)
     sheet = parse_page(page)
     d = get_design(design, params)
+    size = d.size_mm if size_mm is None else size_mm
     ensure_dir(out_dir)
     the_net = design_net(d, size_mm=size_mm, page=sheet, tab_width=tab_width)
-    rendered = render_net(d, the_net, kinds, face_names=face_names)
+    rendered = render_net(d, the_net, kinds, face_names=face_names, copies=copies, mark=mark, pips=pips)
+    warning = small_die_warning(d, size)
     written: list[Path] = []
     try:
         for kind in kinds:
@@ -49,23 +61,25 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, out_dir, 
         for path in written:
             path.unlink(missing_ok=True)
         raise
+    if warning:
+        click.echo(f"diefab: warning: {warning}", err=True)
     balance = paper_balance(d, the_net, design, **card)
-    size = d.size_mm if size_mm is None else size_mm
-    if as_json:
-        emit_json({"files": [str(p) for p in written], "size_mm": size, "pieces": the_net.n_pieces,
-                   "pages": the_net.n_pages, "tabs": len(the_net.tabs), **balance.as_json()})  # fmt: skip
-    else:
-        for path in written:
-            click.echo(str(path))
-        pieces = f"{the_net.n_pieces} piece{'s' * (the_net.n_pieces > 1)}"
-        pages = f"{the_net.n_pages} {sheet.name} page{'s' * (the_net.n_pages > 1)}"
-        click.echo(f"{d.name}: {size:g} mm die ({_size_note(d)}), {pieces} on {pages}, {len(the_net.tabs)} glue tabs")
-        click.echo(balance.summary())
     if balance.warning:
         click.echo(f"diefab: warning: {balance.warning}", err=True)
+    from ..fabricate.unfold import pack_copies
 
-
-def _size_note(design: Design) -> str:
-    from ..fabricate.net import size_note
-
-    return size_note(design)
+    n_pages = max(n.n_pages for n in pack_copies(the_net, copies))
+    if as_json:
+        emit_json({"files": [str(p) for p in written], "size_mm": size, "pieces": the_net.n_pieces,
+                   "pages": n_pages, "tabs": len(the_net.tabs), **balance.as_json()})  # fmt: skip
+        return
+    for path in written:
+        click.echo(str(path))
+    pieces = f"{the_net.n_pieces} piece{'s' * (the_net.n_pieces > 1)}{' each' * (copies > 1)}"
+    tabs = f"{len(the_net.tabs)} glue tabs" if the_net.tabs else "no glue tabs"
+    dice = f"{copies} dice, " if copies > 1 else ""
+    click.echo(
+        f"{d.name}: {size:g} mm die ({d.size_note}), {dice}{pieces} each, {tabs}, on {n_pages} "
+        f"{sheet.name} page{'s' * (n_pages > 1)}\nto read it: {reading_note(d)}"
+    )
+    click.echo(balance.summary())

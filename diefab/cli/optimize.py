@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 import numpy as np
 
+from ..design import format_value
 from ..files import atomic_write, ensure_dir
 from .common import (
     apply_fill,
@@ -116,7 +117,7 @@ def optimize(ctx, design, params, model, target, seed, min_margin, starts, free,
     )
     con.print(
         "value      "
-        + " ".join(f"{v:>6d}" for v in best.support)
+        + " ".join(f"{format_value(v, min(best.support) < 0):>6s}" for v in best.support)
         + "\nmodel x81  "
         + " ".join(f"{81 * q:6.2f}" for q in result.values)
         + "\ntarget x81 "

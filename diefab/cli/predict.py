@@ -121,6 +121,6 @@ def predict(design: str, params, model: str, target: str | None, as_json: bool, 
         con.print("  " + shown + more)
     table = Table("value", "predicted", "target", "difference")
     for v, p, q in zip(d.support, values, goal):
-        table.add_row(str(v), f"{p:.4f}", f"{q:.4f}", f"{p - q:+.4f}")
+        table.add_row(format_value(v, min(d.support) < 0), f"{p:.4f}", f"{q:.4f}", f"{p - q:+.4f}")
     con.print(table)
     con.print(f"Eq. (2) objective {result['objective']:.5f}   TVD {result['tvd']:.4f}   JSD {result['jsd']:.5f}")

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from ..design import format_value
 from .common import console, emit_json, json_option
 
 
@@ -72,8 +73,11 @@ def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, see
 
     con = console()
     table = Table("value", "count", "expected", "observed", f"{1 - alpha:.0%} simultaneous CI", "target")
+    signed = min(goal.values) < 0
     for v, c, e, o, (lo, hi), p in zip(goal.values, x, fit.expected, observed, fit.intervals, goal.probabilities):
-        table.add_row(str(int(v)), str(int(c)), f"{e:.1f}", f"{o:.4f}", f"[{lo:.4f}, {hi:.4f}]", f"{p:.4f}")
+        table.add_row(
+            format_value(int(v), signed), str(int(c)), f"{e:.1f}", f"{o:.4f}", f"[{lo:.4f}, {hi:.4f}]", f"{p:.4f}"
+        )
     con.print(table)
     con.print(
         f"n = {fit.n}   chi2 = {fit.chi2:.3f} (df {fit.df}), p = {fit.p_value:.4f} "

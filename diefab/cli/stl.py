@@ -18,17 +18,49 @@ from .common import (
     out_option,
     print_balance,
 )
+from .net import SIZE_HELP
 
 
 @click.command("stl")
 @design_argument
-@click.option("--size", "size_mm", type=float, default=None, help="Size in mm (2 model units along z).")
+@click.option("--size", "size_mm", type=float, default=None, help=SIZE_HELP)
 @click.option("--depth", "depth_mm", type=float, default=0.6, show_default=True, help="Engraving depth, mm.")
 @click.option("--font", "font_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Font file (default DejaVu Sans Bold, shipped with matplotlib).")  # fmt: skip
 @click.option("--round", "round_mm", type=float, default=0.0, show_default=True, help="Edge/corner radius, mm.")
-@click.option("--emboss", is_flag=True, help="Raise the labels instead of engraving them.")
-@click.option("--format", "formats", default="stl", show_default=True, metavar="stl,3mf", help="Output formats.")
+@click.option(
+    "--emboss",
+    is_flag=True,
+    help="Raise the labels instead of engraving them (the bed face stays flat: unlabelled, or engraved).",
+)
+@click.option(
+    "--bed",
+    "bed_face",
+    default=None,
+    metavar="FACE",
+    help="Face to print on (default: least overhang, unlabelled where possible).",
+)
+@click.option(
+    "--mark",
+    type=click.Choice(["bar", "period", "none"]),
+    default="bar",
+    show_default=True,
+    help="Mark on a label that reads as another label of the die upside down (6 and 9).",
+)
+@click.option("--pips", is_flag=True, help="Values 1 to 9 as pips.")
+@click.option(
+    "--inlay",
+    is_flag=True,
+    help="Also write DIR/<design>-inlay.stl: the labels alone, for paint-fill or a second material.",
+)
+@click.option(
+    "--format",
+    "formats",
+    default="stl",
+    show_default=True,
+    metavar="stl,3mf",
+    help="Output formats; the 3MF holds body and labels as two coloured parts.",
+)
 @click.option("--min-stroke", type=float, default=0.6, show_default=True, help="Warn below this stroke width, mm.")
 @click.option("--min-text-height", type=float, default=2.0, show_default=True, help="Smallest text height, mm.")
 @click.option("--margin", "margin_mm", type=float, default=1.0, show_default=True, help="Text to face edge, mm.")
@@ -38,11 +70,14 @@ from .common import (
 @click.option("--preview", is_flag=True, help="Also write DIR/<design>-preview.png.")
 @out_option
 @json_option
-def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, formats, min_stroke, min_text_height,
-        margin_mm, density, fit_each, preview, out_dir, as_json, **settings) -> None:  # fmt: skip
+def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face, mark, pips, inlay, formats,
+        min_stroke, min_text_height, margin_mm, density, fit_each, preview, out_dir, as_json,
+        **settings) -> None:  # fmt: skip
     """Printable STL/3MF of DESIGN with its values engraved; report volume, mass and balance."""
+    from ..design import format_value
     from ..errors import FabricationError
-    from ..fabricate.stl import build_solid, stl_bytes, threemf_bytes
+    from ..fabricate.labels import reading_note
+    from ..fabricate.stl import build_solid, inlay_stl_bytes, stl_bytes, threemf_bytes
 
     kinds = [f.strip().lower() for f in formats.split(",") if f.strip()]
     bad = [f for f in kinds if f not in ("stl", "3mf")]
@@ -57,9 +92,11 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, formats,
     solid = build_solid(
         d, size_mm=size_mm, depth_mm=depth_mm, font=font_file, round_mm=round_mm, emboss=emboss,
         min_stroke_mm=min_stroke, min_text_height_mm=min_text_height, margin_mm=margin_mm,
-        density_g_cm3=density, print_fill=fill, uniform_height=not fit_each,
+        density_g_cm3=density, print_fill=fill, uniform_height=not fit_each, bed=bed_face, mark=mark, pips=pips,
     )  # fmt: skip
     payloads = {f"{d.name}.{k}": (stl_bytes if k == "stl" else threemf_bytes)(solid) for k in dict.fromkeys(kinds)}
+    if inlay:
+        payloads[f"{d.name}-inlay.stl"] = inlay_stl_bytes(solid)
     if preview:
         from ..fabricate.preview import render_preview
 
@@ -70,23 +107,30 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, formats,
     balance = print_balance(d, solid, fill, design)
     if balance.warning:
         click.echo(f"diefab: warning: {balance.warning}", err=True)
-    report = {"file": written[0], "files": written, **solid.report, **balance.as_json()}
+    report = {"file": written[0], "files": written, "reading": reading_note(d), **solid.report, **balance.as_json()}
     if as_json:
         emit_json(report)
         return
     r = solid.report
+    how = (
+        f"{len(r['embossed'])} labels embossed, {len(r['engraved'])} engraved"
+        if r["embossed"] and r["engraved"]
+        else f"{len(r['labels'])} labels {'embossed' if r['embossed'] else 'engraved'}"
+    )
     click.echo(
-        f"{d.name}: {r['size_mm']:g} mm, {len(r['labels'])} labels {'embossed' if emboss else 'engraved'} "
-        f"{depth_mm:g} mm{f', edges rounded {round_mm:g} mm' if round_mm else ''}\n"
+        f"{d.name}: {r['size_mm']:g} mm ({d.size_note}), {how} {depth_mm:g} mm"
+        f"{f', edges rounded {round_mm:g} mm' if round_mm else ''}, printed on face {r['bed_face']}\n"
+        f"to read it: {reading_note(d)}\n"
         f"volume {r['volume_mm3']:.1f} mm³ (uncut {r['uncut_volume_mm3']:.1f}, text "
         f"{r['engraved_volume_mm3']:.1f}); watertight {r['watertight']}, bodies {r['bodies']}, genus {r['genus']}\n"
         f"mass {r['mass_g']:.2f} g printed ({fill.wall_thickness_mm:.2f} mm walls, {fill.infill:.0%} infill), "
         f"{r['mass_solid_g']:.2f} g solid, at {density:g} g/cm³\n"
-        f"centre of mass shift: engraving {r['com_shift_norm_mm'] * 1000:.1f} µm, "
+        f"centre of mass shift: {'labels' if r['embossed'] else 'engraving'} {r['com_shift_norm_mm'] * 1000:.1f} µm, "
         f"infill {r['infill_com_shift_norm_mm'] * 1000:.1f} µm"
     )
     before = r["probabilities"]["rounded" if round_mm else "sharp"]
-    click.echo("value       " + " ".join(f"{v:>8s}" for v in before))
+    signed = min(d.support) < 0
+    click.echo("value       " + " ".join(f"{format_value(int(v), signed):>8s}" for v in before))
     for key in ("sharp", "rounded", "engraved", "printed"):
         if key in r["probabilities"]:
             click.echo(f"{key:<11s} " + " ".join(f"{p:8.5f}" for p in r["probabilities"][key].values()))

@@ -12,21 +12,17 @@ Examples
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 from ..design import Design
 from ..errors import FabricationError
-from .unfold import TAB_WIDTH, Net, Page, parse_page, unfold
+from .labels import design_axis, reading_note
+from .text import MARKS
+from .unfold import TAB_WIDTH, Net, Page, pack_copies, parse_page, unfold
 
-__all__ = ["FORMATS", "design_net", "parse_formats", "render_net", "size_note"]
+__all__ = ["FORMATS", "design_net", "footer_texts", "parse_formats", "render_net"]
 
 FORMATS = ("svg", "pdf", "png")
-
-
-def size_note(design: Design) -> str:
-    """What ``size_mm`` measures on this design."""
-    if design.family == "gem":
-        return "size = girdle short side, 2 model units along z"
-    return "size = longest side of the bounding box"
 
 
 def parse_formats(spec: str) -> tuple[str, ...]:
@@ -40,26 +36,63 @@ def parse_formats(spec: str) -> tuple[str, ...]:
     return items
 
 
+def footer_texts(design: Design, size_mm: float) -> tuple[str, str]:
+    """The footer's title and reading note for `design` at `size_mm`."""
+    return f"{design.name}: {size_mm:g} mm die ({design.size_note})", reading_note(design)
+
+
 def design_net(
     design: Design, *, size_mm: float | None = None, page: Page | str = "A4", tab_width: float = TAB_WIDTH
 ) -> Net:
-    """The net of `design` at `size_mm` (default: the design's size) on `page`."""
+    """The net of `design` at `size_mm` (default: the design's size) on `page`.
+
+    The page's footer is made as tall as its wrapped text needs at this page width.
+    """
+    from .sheet import plan_footer
+
     size = design.size_mm if size_mm is None else size_mm
     if not (isinstance(size, (int, float)) and math.isfinite(size) and size > 0):
         raise FabricationError(f"size {size} mm must be a positive number of millimetres")
     scale = design.mm_per_unit * size / design.size_mm
     page = parse_page(page) if isinstance(page, str) else page
+    plan = plan_footer(page.width, page.margin, *footer_texts(design, size))
+    page = replace(page, footer=plan.height)
+    if min(page.printable) < 20:
+        raise FabricationError(
+            f"page {page.name} leaves {page.printable[0]:g}x{page.printable[1]:g} mm for the net inside its "
+            "margins and footer; need at least 20x20 mm"
+        )
     return unfold(design.polyhedron, scale, page=page, tab_width=tab_width, size_mm=size)
 
 
-def render_net(design: Design, net: Net, formats=("svg", "pdf"), *, face_names: bool = False) -> dict[str, bytes]:
-    """Render `net` in each format: ``{"svg": bytes, "pdf": bytes, "png": bytes}``."""
-    from .sheet import layout_sheets
+def render_net(
+    design: Design,
+    net: Net,
+    formats=("svg", "pdf"),
+    *,
+    face_names: bool = False,
+    copies: int = 1,
+    mark: str = "bar",
+    pips: bool = False,
+) -> dict[str, bytes]:
+    """Render `copies` copies of `net` in each format: ``{"svg": bytes, "pdf": bytes, "png": bytes}``.
 
+    Parameters
+    ----------
+    mark : {"bar", "period", "none"}
+        Mark on a label that reads as another label of the die upside down.
+    pips : bool
+        Draw value labels 1 to 9 as pips.
+    """
+    from .sheet import layout_sheets, plan_footer
+
+    if mark not in MARKS:
+        raise FabricationError(f"mark {mark!r} is not one of {', '.join(MARKS)}")
     size = net.mm_per_unit * design.size_mm / design.mm_per_unit
+    plan = plan_footer(net.page.width, net.page.margin, *footer_texts(design, round(size, 3)))
     sheets = layout_sheets(
-        net, name=design.name, size_mm=round(size, 3), size_note=size_note(design), labels=design.label_of,
-        face_names=face_names,
+        pack_copies(net, copies), labels=design.label_of, axis=design_axis(design), plan=plan,
+        values=[f for f in design.label_of if f not in design.labels], face_names=face_names, mark=mark, pips=pips,
     )  # fmt: skip
     out: dict[str, bytes] = {}
     for fmt in formats:

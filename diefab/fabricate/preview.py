@@ -13,7 +13,8 @@ import io
 
 import numpy as np
 
-from .stl import Solid, _axis
+from .labels import design_axis, reading_note
+from .stl import Solid
 
 __all__ = ["render_preview"]
 
@@ -70,7 +71,7 @@ def render_preview(solid: Solid, *, dpi: int = 110) -> bytes:
     matplotlib.use("Agg", force=False)
     from matplotlib.figure import Figure
 
-    axis = _axis(solid.design)
+    axis = design_axis(solid.design)
     other = np.array([1.0, 0.0, 0.0])
     side = np.cross(axis, other)
     views = [
@@ -88,10 +89,10 @@ def render_preview(solid: Solid, *, dpi: int = 110) -> bytes:
     rounded = f", round {r['round_mm']:g} mm" if r["round_mm"] else ""
     fig.suptitle(
         f"{r['design']}  {r['size_mm']:g} mm, depth {r['depth_mm']:g} mm{rounded}: volume {r['volume_mm3']:.0f} mm³, "
-        f"COM shift {r['com_shift_norm_mm'] * 1000:.1f} µm",
+        f"COM shift {r['com_shift_norm_mm'] * 1000:.1f} µm\nto read it: {reading_note(solid.design)}",
         fontsize=11,
     )
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0, 1, 1 - 0.75 / fig.get_figheight()))
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)
     return buf.getvalue()

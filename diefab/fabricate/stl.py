@@ -60,7 +60,8 @@ from ..design import Design
 from ..errors import FabricationError
 from ..geometry import Polyhedron, solid_angles
 from ..mass import Fill, inset
-from .text import Font, load_font, stroke_width, text_polygons, thin_fraction
+from .labels import design_axis, face_frame, fit_label, label_shape, small_die_warning
+from .text import Font, load_font, stroke_width, thin_fraction
 
 __all__ = [
     "Label",
@@ -69,13 +70,12 @@ __all__ = [
     "build_solid",
     "cut_labels",
     "flat_face_probabilities",
+    "inlay_stl_bytes",
     "mesh_moments",
     "stl_bytes",
     "threemf_bytes",
 ]
 
-#: A face whose plane holds less than this much of the die's axis uses the longest-edge rule.
-AXIS_PROJECTION = 0.3
 #: Height above the face the cutter starts at, mm (avoids coplanar booleans).
 CUT_OVERSHOOT_MM = 0.2
 #: Largest depth as a fraction of the die's thinnest width.
@@ -146,6 +146,12 @@ class Solid:
     print_rotation : (3, 3) float
         Rotation that puts the print's bed face down (see :func:`bed_face`);
         the exporters write :attr:`print_vertices`.
+    base : (vertices, triangles) or None
+        The body without its labels' material: engraved pockets empty, no
+        raised text (the first colour of a two-colour print).
+    inlay : (vertices, triangles) or None
+        The labels as their own solid (what fills the pockets and what
+        stands out of the faces): with `base` it makes up the finished die.
     """
 
     design: Design
@@ -156,13 +162,19 @@ class Solid:
     report: dict[str, Any]
     warnings: tuple[str, ...]
     print_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
+    base: tuple[np.ndarray, np.ndarray] | None = None
+    inlay: tuple[np.ndarray, np.ndarray] | None = None
+
+    def on_bed(self, vertices: np.ndarray) -> np.ndarray:
+        """(n, 3) float, mm: `vertices` moved as the body is onto the print bed (see :attr:`print_vertices`)."""
+        v = self.vertices @ self.print_rotation.T
+        lo, hi = v.min(axis=0), v.max(axis=0)
+        return vertices @ self.print_rotation.T - np.array([(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, lo[2]])
 
     @property
     def print_vertices(self) -> np.ndarray:
         """(n, 3) float, mm: the body on the print bed (z >= 0, bed face at z = 0, centred in x and y)."""
-        v = self.vertices @ self.print_rotation.T
-        lo, hi = v.min(axis=0), v.max(axis=0)
-        return v - np.array([(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, lo[2]])
+        return self.on_bed(self.vertices)
 
     @property
     def volume_mm3(self) -> float:
@@ -241,18 +253,26 @@ def _check(manifold, what: str):
     return manifold
 
 
-def bed_face(poly: Polyhedron, overhang_deg: float = 45.0) -> int:
-    """The face to print on: least overhanging area, then the largest face.
+def bed_face(poly: Polyhedron, overhang_deg: float = 45.0, *, avoid=(), strict: bool = False) -> int:
+    """The face to print on: least overhanging area, then a face not in `avoid`, then the largest.
 
     With face k on the bed, a face whose outward normal is within
     `overhang_deg` of straight down (other than face k) needs support; its
-    area counts as overhang.
+    area counts as overhang.  `avoid` lists faces that carry a label: text on
+    the bed face prints poorly, and raised text would stand the print on its
+    letters.  With `strict`, any face outside `avoid` beats every face in it,
+    whatever the overhang (embossed labels); when all faces are in `avoid`
+    the usual choice stands and the caller engraves that face's label.
     """
     limit = math.cos(math.radians(overhang_deg))
     down = poly.normals @ poly.normals.T  # [k, j]: cos between face j's normal and "down" when k is on the bed
     overhang = np.where((down > limit + tol.TIE) & ~np.eye(len(poly.faces), dtype=bool), poly.areas[None, :], 0.0)
     cost = overhang.sum(axis=1)
-    best = np.flatnonzero(cost <= cost.min() + tol.AREA)
+    labelled = np.isin(np.arange(len(poly.faces)), list(avoid))
+    pool = np.flatnonzero(~labelled) if strict and not labelled.all() else np.arange(len(poly.faces))
+    best = pool[cost[pool] <= cost[pool].min() + tol.AREA]
+    if not labelled[best].all():
+        best = best[~labelled[best]]
     return int(best[np.argmax(poly.areas[best])])
 
 
@@ -266,10 +286,6 @@ def _rotation_to_down(normal: np.ndarray) -> np.ndarray:
     k = axis / s
     kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
     return np.eye(3) + s * kx + (1 - c) * kx @ kx
-
-
-def _axis(design: Design) -> np.ndarray:
-    return np.array([0.0, 1.0, 0.0]) if design.family == "gem" else np.array([0.0, 0.0, 1.0])
 
 
 def _min_width(poly: Polyhedron) -> float:
@@ -303,18 +319,6 @@ def _ring_order(points: np.ndarray, normal: np.ndarray) -> np.ndarray:
     return points[hull.vertices]  # scipy orders 2D hull vertices counter-clockwise in (u, w)
 
 
-def _face_frame(ring: np.ndarray, normal: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Baseline direction u and up direction v of a face (u × v = outward normal)."""
-    up = axis - (axis @ normal) * normal
-    if np.linalg.norm(up) < AXIS_PROJECTION:
-        edges = np.roll(ring, -1, axis=0) - ring
-        k = int(np.argmax(np.linalg.norm(edges, axis=1)))
-        along = edges[k] / np.linalg.norm(edges[k])
-        up = np.cross(normal, along)  # points into the face from edge k (rings are CCW from outside)
-    up = up / np.linalg.norm(up)
-    return np.cross(up, normal), up
-
-
 # ----------------------------------------------------------------------
 # building
 
@@ -343,24 +347,28 @@ def _rounded(poly: Polyhedron, scale: float, inset_mm: float, radius_mm: float, 
     return _check(body ^ clip, "clipping the rounded body to the face planes")
 
 
-def _flat_faces(poly: Polyhedron, scale: float, vertices: np.ndarray) -> list[np.ndarray | None]:
-    """The flat part of each face of a body (mm, ordered rings), None where nothing flat is left."""
-    dist = vertices @ poly.normals.T - poly.offsets * scale
-    eps = tol.STL_PLANE_MM
-    rings: list[np.ndarray | None] = []
+def _flat_faces(poly: Polyhedron, scale: float, round_mm: float) -> list[np.ndarray | None]:
+    """The flat part of each face after rounding by `round_mm` (mm, ordered rings), None where none is left.
+
+    Rounding is the die shrunk by the radius and grown back by a ball, so the
+    flat part of face k is face k of the shrunk die moved out by the radius
+    along its normal: exact, whatever the face's orientation.
+    """
+    rings = [poly.vertices[f] * scale for f in poly.faces]
+    if round_mm <= 0:
+        return rings
+    core = inset(poly, round_mm / scale)
+    if core is None:
+        return [None] * len(poly.faces)
+    out: list[np.ndarray | None] = []
     for k in range(len(poly.faces)):
-        on = vertices[np.abs(dist[:, k]) < eps]
-        if len(on) < 3:
-            rings.append(None)
+        cos = core.normals @ poly.normals[k]
+        j = int(np.argmax(cos))
+        if cos[j] < 1 - tol.COPLANAR or core.areas[j] * scale**2 <= tol.AREA * scale**2:
+            out.append(None)
             continue
-        try:
-            ring = _ring_order(on, poly.normals[k])
-        except Exception:  # collinear points: an edge, not a face
-            rings.append(None)
-            continue
-        area = 0.5 * np.linalg.norm(np.cross(ring - ring[0], np.roll(ring, -1, axis=0) - ring[0]).sum(axis=0))
-        rings.append(ring if area > tol.AREA * scale**2 else None)
-    return rings
+        out.append(core.vertices[core.faces[j]] * scale + round_mm * poly.normals[k])
+    return out
 
 
 def _place_label(
@@ -369,7 +377,7 @@ def _place_label(
     ring: np.ndarray,
     normal: np.ndarray,
     axis: np.ndarray,
-    font: Font,
+    glyphs,
     margin_mm: float,
     min_height_mm: float,
     min_stroke_mm: float,
@@ -377,39 +385,24 @@ def _place_label(
 ) -> Label:
     from shapely import affinity
     from shapely.geometry import Polygon
-    from shapely.ops import polylabel
 
-    u, v = _face_frame(ring, normal, axis)
+    u, v = face_frame(ring, normal, axis)
     origin = ring.mean(axis=0)
     face2d = Polygon(np.column_stack([(ring - origin) @ u, (ring - origin) @ v]))
     inner = face2d.buffer(-margin_mm, join_style="mitre")
-    glyphs = text_polygons(text, font)
     if inner.is_empty or inner.area <= 0:
         raise FabricationError(
             f"label {text!r} does not fit on face {face}: the face is narrower than twice the margin "
             f"({margin_mm:.2f} mm); use a larger --size"
         )
-    center = polylabel(inner, tolerance=0.01)
-    # the largest inscribed circle can slide (a trapezoid, a rectangle): take the middle of
-    # the centres within 10 % of the best radius, not polylabel's arbitrary pick among ties
-    radius = inner.exterior.distance(center)
-    near_best = inner.buffer(-0.9 * radius)
-    if not near_best.is_empty:
-        center = near_best.centroid
-    hull = glyphs.convex_hull
-    x0, y0, x1, y1 = inner.bounds
-    lo, hi = 0.0, 2 * max(x1 - x0, y1 - y0) / max(min(np.ptp(np.asarray(hull.exterior.coords), axis=0)), 1e-9)
-    for _ in range(40):
-        mid = 0.5 * (lo + hi)
-        placed = affinity.translate(affinity.scale(hull, mid, mid, origin=(0, 0)), center.x, center.y)
-        lo, hi = (mid, hi) if inner.contains(placed) else (lo, mid)
-    height = min(lo, max_height_mm)
-    if lo < min_height_mm:
+    fitted, cx, cy = fit_label(inner, glyphs)
+    height = min(fitted, max_height_mm)
+    if fitted < min_height_mm:
         raise FabricationError(
-            f"label {text!r} does not fit on face {face}: at most {lo:.2f} mm high, "
+            f"label {text!r} does not fit on face {face}: at most {fitted:.2f} mm high, "
             f"below the minimum text height {min_height_mm:g} mm (use a larger --size or a shorter label)"
         )
-    outline = affinity.translate(affinity.scale(glyphs, height, height, origin=(0, 0)), center.x, center.y)
+    outline = affinity.translate(affinity.scale(glyphs, height, height, origin=(0, 0)), cx, cy)
     c2 = outline.centroid
     return Label(
         face=face,
@@ -418,7 +411,7 @@ def _place_label(
         stroke_mm=float(stroke_width(glyphs) * height),
         thin_fraction=thin_fraction(outline, min_stroke_mm),
         area_mm2=float(outline.area),
-        center_mm=origin + center.x * u + center.y * v,
+        center_mm=origin + cx * u + cy * v,
         centroid_mm=origin + c2.x * u + c2.y * v,
         baseline=u,
         up=v,
@@ -480,6 +473,8 @@ def build_solid(
     batched: bool = True,
     bed: str | None = None,
     uniform_height: bool = True,
+    mark: str = "bar",
+    pips: bool = False,
 ) -> Solid:
     """The printable die: hull (rounded if asked), labels engraved or embossed, checked and measured.
 
@@ -487,7 +482,7 @@ def build_solid(
     ----------
     design : Design
     size_mm : float, optional
-        Overrides ``design.size_mm`` (the length of 2 model units along z).
+        Overrides ``design.size_mm`` (what it measures: ``design.size_note``).
     depth_mm : float
         Engraving depth (embossing height), mm; below ``MAX_DEPTH_FRACTION``
         of the die's thinnest width.
@@ -497,7 +492,9 @@ def build_solid(
         Radius of the edge and corner rounding, mm (0: sharp).
     emboss : bool
         Raise the labels instead of cutting them (the die then no longer
-        rests flat on labelled faces).
+        rests flat on labelled faces).  The print never stands on raised
+        text: the bed face is an unlabelled one if the die has one, else its
+        label is engraved (a warning says so).
     min_stroke_mm : float
         Thinner strokes give a warning (what the printer's nozzle can draw).
     min_text_height_mm : float
@@ -516,8 +513,13 @@ def build_solid(
         on commercial dice (labels set in the design's ``labels`` table, like
         the gem's logo, keep their own fit); false sizes each to its face.
     bed : str, optional
-        Face to print on (default :func:`bed_face`); the exported files are
-        rotated so it lies on the bed.
+        Face to print on (default :func:`bed_face`, avoiding labelled faces);
+        the exported files are rotated so it lies on the bed.
+    mark : {"bar", "period", "none"}
+        How a label that reads as another label of the die upside down is
+        marked (a 6 on a die that also has a 9).
+    pips : bool
+        Show value labels 1 to 9 as pips.
 
     Returns
     -------
@@ -570,11 +572,22 @@ def build_solid(
     elif print_fill.kind != "print":
         raise FabricationError(f"print_fill must be a 'print' fill, got kind {print_fill.kind!r}")
 
+    labelled = set(design.label_of)
     try:
-        bed_index = bed_face(poly) if bed is None else poly.face_index(bed)
+        if bed is not None:
+            bed_index = poly.face_index(bed)
+        else:
+            avoid = [poly.face_index(f) for f in labelled]
+            bed_index = bed_face(poly, avoid=avoid, strict=emboss)
+    except FabricationError:
+        raise
     except Exception as exc:
         raise FabricationError(f"bed face: {exc}") from exc
+    bed_name = poly.names[bed_index]
     warnings: list[str] = []
+    small = small_die_warning(design)
+    if small:
+        warnings.append(small)
     sharp = _hull(poly.vertices * scale)
     if round_mm > 0:
         body = _rounded(poly, scale, round_mm, round_mm, sharp)
@@ -586,46 +599,46 @@ def build_solid(
         body = sharp
     body_mesh = body.to_mesh64()
     body_vertices = np.asarray(body_mesh.vert_properties)[:, :3]
-    flat = _flat_faces(poly, scale, body_vertices)
+    flat = _flat_faces(poly, scale, round_mm)
     for k, ring in enumerate(flat):
         if ring is None:
             warnings.append(f"face {poly.names[k]} has no flat part left after rounding: the die cannot rest on it")
 
     # --- labels
-    axis = _axis(design)
+    axis = design_axis(design)
     cots = _max_cot_dihedral(poly)
+    texts = design.label_of
+    shapes = {face: label_shape(t, font, others=texts.values(), mark=mark, pips=pips) for face, t in texts.items()}
 
     def place(face: str, text: str, cap: float = math.inf) -> Label:
         k = poly.face_index(face)
         if flat[k] is None:
             raise FabricationError(f"label {text!r} does not fit on face {face}: rounding left no flat part")
         return _place_label(
-            face, text, flat[k], poly.normals[k], axis, font,
+            face, text, flat[k], poly.normals[k], axis, shapes[face],
             margin_mm + depth_mm * cots[k], min_text_height_mm, min_stroke_mm, cap,
         )  # fmt: skip
 
-    fitted = {face: place(face, text) for face, text in design.label_of.items()}
+    fitted = {face: place(face, text) for face, text in texts.items()}
     values = [face for face in fitted if face not in design.labels]  # computed value labels, not logos
     if uniform_height and values:
         common = min(fitted[face].height_mm for face in values)
         fitted.update({face: place(face, fitted[face].text, common) for face in values})
-    labels: list[Label] = []
-    for face, label in fitted.items():
-        text = label.text
-        if label.stroke_mm < min_stroke_mm:
-            warnings.append(
-                f"face {face} label {text!r}: strokes about {label.stroke_mm:.2f} mm wide, "
-                f"thinner than --min-stroke {min_stroke_mm:g} mm (use a larger --size)"
-            )
-        elif label.thin_fraction > THIN_AREA_WARNING:
-            warnings.append(
-                f"face {face} label {text!r}: {label.thin_fraction:.0%} of the text is thinner than "
-                f"--min-stroke {min_stroke_mm:g} mm"
-            )
-        labels.append(label)
-    cutters = [_cutter(label, depth_mm, emboss) for label in labels]
-    final = cut_labels(body, cutters, emboss=emboss, batched=batched)
-    if emboss:
+    labels = list(fitted.values())
+    warnings.extend(_stroke_warnings(labels, min_stroke_mm))
+    # embossed labels must not stand the print on its bed face: that one is engraved
+    raised = [emboss and label.face != bed_name for label in labels]
+    if emboss and bed_name in labelled:
+        warnings.append(
+            f"every face carries a label: the bed face {bed_name} ({texts[bed_name]!r}) is engraved, "
+            "the others embossed, so the print stands flat"
+        )
+    cutters = [_cutter(label, depth_mm, up) for label, up in zip(labels, raised)]
+    raised_cutters = [c for c, up in zip(cutters, raised) if up]
+    sunk_cutters = [c for c, up in zip(cutters, raised) if not up]
+    final = cut_labels(body, raised_cutters, emboss=True, batched=batched)
+    final = cut_labels(final, sunk_cutters, emboss=False, batched=batched)
+    if any(raised):
         warnings.append("embossed labels stand out of their faces: the die does not rest flat on them")
 
     # --- checks
@@ -640,6 +653,8 @@ def build_solid(
     label_tri = np.zeros(len(triangles), dtype=bool)
     for rid, start, stop in zip(run_ids, run_tri[:-1], run_tri[1:]):
         label_tri[start:stop] = rid in cutter_ids
+    inlay = _label_part(body, raised_cutters, sunk_cutters)
+    base = cut_labels(body, sunk_cutters, emboss=False, batched=batched) if raised_cutters else final
     import trimesh
 
     tm = trimesh.Trimesh(vertices, triangles, process=True)
@@ -658,13 +673,12 @@ def build_solid(
     if volume <= 0:
         raise FabricationError(f"the solid has non-positive volume {volume:.6g} mm³")
     expected_cut = sum(label.area_mm2 for label in labels) * depth_mm
-    sign = 1 if emboss else -1
-    expected_volume = uncut_volume + sign * expected_cut
+    signed_cut = sum((1 if up else -1) * label.area_mm2 for label, up in zip(labels, raised)) * depth_mm
+    expected_volume = uncut_volume + signed_cut
     if abs(volume - expected_volume) > tol.STL_VOLUME_REL * expected_volume:
         raise FabricationError(
             f"volume {volume:.2f} mm³ differs from the expected {expected_volume:.2f} mm³ "
-            f"(uncut {uncut_volume:.2f} {'+' if emboss else '-'} text {expected_cut:.2f}) by more than "
-            f"{tol.STL_VOLUME_REL:.1%}"
+            f"(uncut {uncut_volume:.2f} {signed_cut:+.2f} text) by more than {tol.STL_VOLUME_REL:.1%}"
         )
 
     # --- mass and balance
@@ -681,13 +695,13 @@ def build_solid(
                 lb.centroid_mm,
                 lb.normal,
                 depth_mm,
-                emboss,
+                up,
                 lb.outline,
                 lb.origin_mm,
                 lb.baseline,
                 lb.up,
             )  # fmt: skip
-            for lb in labels
+            for lb, up in zip(labels, raised)
         )
         printed = mass_properties(poly, print_fill, mm_per_unit=scale, bed=bed_index, labels=label_mass)
         print_volume, com_print = printed.mass * scale**3, printed.center * scale
@@ -704,7 +718,7 @@ def build_solid(
         hollow = 1 - print_fill.infill
         print_volume = volume - hollow * core_volume
         com_print = (first - hollow * core_first) / print_volume
-    if not emboss and depth_mm > print_fill.wall_thickness_mm and core is not None:
+    if not all(raised) and depth_mm > print_fill.wall_thickness_mm and core is not None:
         warnings.append(
             f"depth {depth_mm:g} mm exceeds the print's wall {print_fill.wall_thickness_mm:g} mm: the slicer adds "
             "walls around the engraving, so the printed mass and centre of mass are approximate"
@@ -794,11 +808,64 @@ def build_solid(
         report["flat_face_area_mm2"] = {
             poly.names[k]: 0.0 if ring is None else _ring_area(ring) for k, ring in enumerate(flat)
         }
-    report["bed_face"] = poly.names[bed_index]
+    report["bed_face"] = bed_name
+    report["embossed"] = [label.face for label, up in zip(labels, raised) if up]
+    report["engraved"] = [label.face for label, up in zip(labels, raised) if not up]
     return Solid(
         design, vertices, triangles, label_tri, tuple(labels), report, tuple(warnings),
-        _rotation_to_down(poly.normals[bed_index]),
+        _rotation_to_down(poly.normals[bed_index]), _mesh_arrays(base), inlay,
     )  # fmt: skip
+
+
+def _mesh_arrays(manifold) -> tuple[np.ndarray, np.ndarray]:
+    mesh = manifold.to_mesh64()
+    return np.asarray(mesh.vert_properties)[:, :3].copy(), np.asarray(mesh.tri_verts, dtype=np.int64).copy()
+
+
+def _label_part(body, raised: list, sunk: list) -> tuple[np.ndarray, np.ndarray] | None:
+    """The labels as their own solid: what the engraving removed plus what the embossing added.
+
+    With the body as cut (engraved pockets, no raised text) it makes up the
+    finished die: print it in a second colour, or paint-fill the pockets.
+    """
+    import manifold3d
+
+    parts = []
+    if sunk:
+        pockets = _check(manifold3d.Manifold.batch_boolean(sunk, manifold3d.OpType.Add), "joining the labels")
+        parts.append(_check(body ^ pockets, "measuring the engraved pockets"))
+    if raised:
+        relief = _check(manifold3d.Manifold.batch_boolean(raised, manifold3d.OpType.Add), "joining the labels")
+        parts.append(_check(relief - body, "measuring the raised labels"))
+    if not parts:
+        return None
+    return _mesh_arrays(_check(manifold3d.Manifold.batch_boolean(parts, manifold3d.OpType.Add), "joining labels"))
+
+
+def _stroke_warnings(labels: list[Label], min_stroke_mm: float) -> list[str]:
+    """One warning for the whole die when strokes are thinner than `min_stroke_mm`, naming the labels."""
+    thin = [lb for lb in labels if lb.stroke_mm < min_stroke_mm]
+    partly = [lb for lb in labels if lb.stroke_mm >= min_stroke_mm and lb.thin_fraction > THIN_AREA_WARNING]
+    parts = []
+    if thin:
+        lo, hi = min(lb.stroke_mm for lb in thin), max(lb.stroke_mm for lb in thin)
+        width = f"{lo:.2f}" if hi - lo < 0.005 else f"{lo:.2f}-{hi:.2f}"
+        parts.append(f"{_which(thin, labels)} {'has' if len(thin) == 1 else 'have'} strokes about {width} mm wide")
+    if partly:
+        share = max(lb.thin_fraction for lb in partly)
+        parts.append(f"{_which(partly, labels)} {'has' if len(partly) == 1 else 'have'} up to {share:.0%} of the "
+                     "text in thinner strokes")  # fmt: skip
+    if not parts:
+        return []
+    return [f"{'; '.join(parts)}, below --min-stroke {min_stroke_mm:g} mm (use a larger --size)"]
+
+
+def _which(some: list[Label], labels: list[Label]) -> str:
+    if len(some) == len(labels):
+        return f"all {len(labels)} labels"
+    if len(some) > 4:
+        return f"{len(some)} of {len(labels)} labels"
+    return ", ".join(f"{lb.text!r} (face {lb.face})" for lb in some)
 
 
 def _ring_area(ring: np.ndarray) -> float:
@@ -810,8 +877,26 @@ def _ring_area(ring: np.ndarray) -> float:
 
 
 def stl_bytes(solid: Solid) -> bytes:
-    """Binary STL of the body, millimetres."""
-    tri = solid.print_vertices[solid.triangles]
+    """Binary STL of the body, millimetres, bed face down."""
+    return _stl(solid.print_vertices, solid.triangles, f"diefab {solid.design.name} mm")
+
+
+def inlay_stl_bytes(solid: Solid) -> bytes:
+    """Binary STL of the labels alone (:attr:`Solid.inlay`), placed as on the body's print bed.
+
+    Raises
+    ------
+    FabricationError
+        If the die has no labels.
+    """
+    if solid.inlay is None:
+        raise FabricationError(f"design {solid.design.name!r} has no labels to write as an inlay")
+    vertices, triangles = solid.inlay
+    return _stl(solid.on_bed(vertices), triangles, f"diefab {solid.design.name} labels mm")
+
+
+def _stl(vertices: np.ndarray, triangles: np.ndarray, title: str) -> bytes:
+    tri = vertices[triangles]
     normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     length = np.linalg.norm(normals, axis=1, keepdims=True)
     normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
@@ -819,7 +904,7 @@ def stl_bytes(solid: Solid) -> bytes:
     data = np.zeros(len(tri), dtype=record)
     data["normal"] = normals
     data["vertices"] = tri
-    header = f"diefab {solid.design.name} mm".encode("ascii", "replace")[:80].ljust(80, b" ")
+    header = title.encode("ascii", "replace")[:80].ljust(80, b" ")
     return header + np.uint32(len(tri)).tobytes() + data.tobytes()
 
 
@@ -839,25 +924,67 @@ _RELS = (
 )
 
 
-def threemf_bytes(solid: Solid) -> bytes:
-    """3MF package (core specification, unit millimetre) of the body."""
-    from xml.sax.saxutils import escape
+#: Display colours of the 3MF's two materials (sRGB with alpha).
+BODY_COLOR = "#F2EBD9FF"
+LABEL_COLOR = "#1F3373FF"
 
-    verts = "".join(f'<vertex x="{x:.6f}" y="{y:.6f}" z="{z:.6f}"/>' for x, y, z in solid.print_vertices)
-    tris = "".join(f'<triangle v1="{a}" v2="{b}" v3="{c}"/>' for a, b, c in solid.triangles)
+
+def threemf_bytes(solid: Solid) -> bytes:
+    """3MF package (core specification, unit millimetre): the die as one object of two coloured parts.
+
+    The body (pockets empty, no raised text) and the labels (:attr:`Solid.inlay`)
+    are two closed shells of one object's mesh; every triangle names its base
+    material (body or labels, each with a display colour), and PrusaSlicer's
+    ``Metadata/Slic3r_PE_model.config`` names the two triangle ranges as the
+    object's two parts, so a multi-material printer prints the values in a
+    second colour.  A die without labels is one shell.
+    """
+    from xml.sax.saxutils import escape, quoteattr
+
+    name = escape(solid.design.name)
+    parts = (
+        [("body", *solid.base), ("labels", *solid.inlay)]
+        if solid.inlay is not None and solid.base
+        else [("body", solid.vertices, solid.triangles)]
+    )
+    verts, tris, ranges, offset, first = [], [], [], 0, 0
+    for index, (part, vertices, triangles) in enumerate(parts):
+        verts.extend(f'<vertex x="{x:.6f}" y="{y:.6f}" z="{z:.6f}"/>' for x, y, z in solid.on_bed(vertices))
+        tris.extend(
+            f'<triangle v1="{a + offset}" v2="{b + offset}" v3="{c + offset}" pid="1" p1="{index}"/>'
+            for a, b, c in triangles
+        )
+        ranges.append((part, first, first + len(triangles) - 1))
+        offset, first = offset + len(vertices), first + len(triangles)
+    materials = (
+        f'<basematerials id="1"><base name="body" displaycolor={quoteattr(BODY_COLOR)}/>'
+        f'<base name="labels" displaycolor={quoteattr(LABEL_COLOR)}/></basematerials>'
+    )
     model = (
         '<?xml version="1.0" encoding="UTF-8"?>\n'
         '<model unit="millimeter" xml:lang="en-US" '
-        'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02">'
-        f'<metadata name="Title">{escape(solid.design.name)}</metadata>'
+        'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02" '
+        'xmlns:slic3rpe="http://schemas.slic3r.org/3mf/2017/06">'
+        '<metadata name="slic3rpe:Version3mf">1</metadata>'
+        f'<metadata name="Title">{name}</metadata>'
         '<metadata name="Application">diefab</metadata>'
-        f'<resources><object id="1" type="model" name="{escape(solid.design.name)}">'
-        f"<mesh><vertices>{verts}</vertices><triangles>{tris}</triangles></mesh></object></resources>"
-        '<build><item objectid="1"/></build></model>'
+        f'<resources>{materials}<object id="2" type="model" name="{name}" pid="1" pindex="0">'
+        f"<mesh><vertices>{''.join(verts)}</vertices><triangles>{''.join(tris)}</triangles></mesh></object>"
+        '</resources><build><item objectid="2"/></build></model>'
+    )
+    volumes = "".join(
+        f'<volume firstid="{lo}" lastid="{hi}"><metadata type="volume" key="name" value="{name} {part}"/>'
+        '<metadata type="volume" key="volume_type" value="ModelPart"/></volume>'
+        for part, lo, hi in ranges
+    )
+    config = (
+        '<?xml version="1.0" encoding="UTF-8"?>\n<config><object id="2" instances_count="1">'
+        f'<metadata type="object" key="name" value="{name}"/>{volumes}</object></config>'
     )
     buf = io.BytesIO()
     with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as zf:
         zf.writestr("[Content_Types].xml", _CONTENT_TYPES)
         zf.writestr("_rels/.rels", _RELS)
         zf.writestr("3D/3dmodel.model", model)
+        zf.writestr("Metadata/Slic3r_PE_model.config", config)
     return buf.getvalue()

@@ -12,9 +12,10 @@ Two readability rules are applied to the text itself:
 * a true minus sign (U+2212) is used when the font has one; otherwise the
   ASCII hyphen-minus, which is shorter and could read as a scratch, is drawn
   as a bar as wide as the font's ``+``;
-* a label that still reads as a (different) number upside down (``6``,
-  ``9``, ``66``, ``86``; ``8`` or ``0`` do not change) gets a bar under it,
-  the usual mark on dice.
+* a label that reads as another label of the same die upside down (``6``
+  and ``9`` on a d20, not ``16``, whose turned reading ``91`` is on no face)
+  may get a mark: a bar under it (``mark="bar"``) or a period after it
+  (``mark="period"``); the caller decides with :func:`ambiguous`.
 
 Examples
 --------
@@ -24,6 +25,8 @@ Examples
 (1, 1.0)
 >>> needs_underline("6"), needs_underline("+6"), needs_underline("8"), needs_underline("−3")
 (True, True, False, False)
+>>> ambiguous("6", ["6", "9"]), ambiguous("16", ["16", "19"]), ambiguous("6", ["1", "6"])
+(True, False, False)
 """
 
 from __future__ import annotations
@@ -37,10 +40,15 @@ import numpy as np
 from ..errors import FabricationError
 
 __all__ = [
+    "MARKS",
     "Font",
+    "ambiguous",
     "load_font",
     "needs_underline",
+    "nest_rings",
     "stroke_width",
+    "text_advance",
+    "text_outline",
     "text_polygons",
     "thin_fraction",
 ]
@@ -50,6 +58,8 @@ MINUS = "\u2212"
 _ROTATED = {"0": "0", "1": "1", "6": "9", "8": "8", "9": "6"}
 #: Points per Bézier segment when flattening glyph outlines.
 CURVE_STEPS = 8
+#: How a label that reads as another one upside down is marked.
+MARKS = ("bar", "period", "none")
 
 
 @dataclass(frozen=True)
@@ -63,23 +73,23 @@ class Font:
         return self.path.name
 
 
-def default_font_path() -> Path:
-    """DejaVu Sans Bold, which ships with matplotlib (bold strokes print better)."""
+def default_font_path(bold: bool = True) -> Path:
+    """DejaVu Sans Bold (or Book), which ships with matplotlib (bold strokes print better)."""
     from matplotlib import font_manager
 
-    prop = font_manager.FontProperties(family="DejaVu Sans", weight="bold")
+    prop = font_manager.FontProperties(family="DejaVu Sans", weight="bold" if bold else "normal")
     return Path(font_manager.findfont(prop, fallback_to_default=True))
 
 
-def load_font(path: str | Path | None = None) -> Font:
-    """Check that `path` (default: DejaVu Sans Bold) is a readable font.
+def load_font(path: str | Path | None = None, *, bold: bool = True) -> Font:
+    """Check that `path` (default: DejaVu Sans Bold, or Book if not `bold`) is a readable font.
 
     Raises
     ------
     FabricationError
         If the file does not exist or FreeType cannot read it.
     """
-    font_path = default_font_path() if path is None else Path(path)
+    font_path = default_font_path(bold) if path is None else Path(path)
     if not font_path.is_file():
         raise FabricationError(f"font file {font_path} does not exist")
     try:
@@ -110,6 +120,23 @@ def needs_underline(text: str) -> bool:
     return "".join(_ROTATED[ch] for ch in reversed(digits)) != digits
 
 
+def turned(text: str) -> str | None:
+    """`text` as it reads turned by 180 degrees, or None if it does not read as a label then."""
+    if not text or not all(ch in _ROTATED for ch in text):
+        return None
+    return "".join(_ROTATED[ch] for ch in reversed(text))
+
+
+def ambiguous(text: str, others) -> bool:
+    """True if `text` turned by 180 degrees reads as a different label among `others`.
+
+    A "6" needs a mark on a die that also carries a "9", not on a d6; a "16"
+    needs none on a d20, since no face reads "91".
+    """
+    other = turned(text)
+    return other is not None and other != text and other in set(others)
+
+
 def _flatten(path) -> list[np.ndarray]:
     """Closed rings of a matplotlib path, Bézier segments sampled at CURVE_STEPS points."""
     from matplotlib.path import Path as MplPath
@@ -136,6 +163,11 @@ def _flatten(path) -> list[np.ndarray]:
     return rings
 
 
+def nest_rings(rings: list[np.ndarray]):
+    """Closed rings (each (k, 2)) nested even-odd into one shapely geometry, whatever their orientation."""
+    return _nest(rings)
+
+
 def _nest(rings: list[np.ndarray]):
     """Even-odd nesting of closed rings into a shapely geometry."""
     from shapely import make_valid
@@ -150,15 +182,21 @@ def _nest(rings: list[np.ndarray]):
         if poly.area > 0:
             polys.append(poly)
     probes = [p.representative_point() for p in polys]
+    bounds = [p.bounds for p in polys]
+
+    def inside(j: int, i: int) -> bool:  # ring j within ring i (bounding boxes first: text has many rings)
+        x, y = probes[j].x, probes[j].y
+        b = bounds[i]
+        return b[0] <= x <= b[2] and b[1] <= y <= b[3] and polys[i].contains(probes[j])
+
     depth = [
-        sum(1 for j, q in enumerate(polys) if j != i and q.area > p.area and q.contains(probes[i]))
-        for i, p in enumerate(polys)
+        sum(1 for j, q in enumerate(polys) if j != i and q.area > p.area and inside(i, j)) for i, p in enumerate(polys)
     ]
     filled = []
     for i, p in enumerate(polys):
         if depth[i] % 2:
             continue
-        children = [q for j, q in enumerate(polys) if depth[j] == depth[i] + 1 and p.contains(probes[j])]
+        children = [q for j, q in enumerate(polys) if depth[j] == depth[i] + 1 and inside(j, i)]
         filled.append(p.difference(unary_union(children)) if children else p)
     return unary_union(filled)
 
@@ -172,7 +210,7 @@ def _raw_text(text: str, font_path: str):
     return _nest(_flatten(TextPath((0, 0), text, size=1.0, prop=prop)))
 
 
-def text_polygons(text: str, font: Font | None = None):
+def text_polygons(text: str, font: Font | None = None, mark: str = "none"):
     """The outline of `text` as a shapely geometry, digit height 1, bbox centred on the origin.
 
     Parameters
@@ -181,6 +219,9 @@ def text_polygons(text: str, font: Font | None = None):
         The label; ``-`` and U+2212 both give a minus sign.
     font : Font, optional
         Default :func:`load_font`.
+    mark : {"none", "bar", "period"}
+        A bar under the text or a period after it (part of the outline, so
+        fitting the label counts it).
 
     Returns
     -------
@@ -214,12 +255,46 @@ def text_polygons(text: str, font: Font | None = None):
     if hyphen_as_bar:
         geom = _widen_hyphens(geom, text, path)
     geom = affinity.scale(geom, 1 / unit, 1 / unit, origin=(0, 0))
-    if needs_underline(text):
+    if mark not in MARKS:
+        raise FabricationError(f"mark {mark!r} is not one of {', '.join(MARKS)}")
+    if mark != "none":
         x0, y0, x1, _ = geom.bounds
         bar = stroke_width(geom)
-        geom = unary_union([geom, box(x0, y0 - 2.2 * bar, x1, y0 - 1.2 * bar)])
+        if mark == "bar":
+            geom = unary_union([geom, box(x0, y0 - 2.2 * bar, x1, y0 - 1.2 * bar)])
+        else:
+            dot = 1.4 * bar
+            geom = unary_union([geom, box(x1 + 0.6 * bar, y0, x1 + 0.6 * bar + dot, y0 + dot)])
     x0, y0, x1, y1 = geom.bounds
     return affinity.translate(geom, -(x0 + x1) / 2, -(y0 + y1) / 2)
+
+
+def text_outline(text: str, font: Font | None = None):
+    """The outline of `text` at font size 1 (em): baseline on y = 0, starting at x = 0, y up.
+
+    For running text (a page's footer, edge letters); labels on faces use
+    :func:`text_polygons`.  Returns None for blank text.
+    """
+    font = font or load_font()
+    if not text.strip():
+        return None
+    for ch in text:
+        if not ch.isspace() and not _has_glyph(font, ch):
+            raise FabricationError(f"font {font.name} has no glyph for {ch!r} (U+{ord(ch):04X}) in {text!r}")
+    return _raw_text(text, str(font.path))
+
+
+@lru_cache(maxsize=1024)
+def text_advance(text: str, font: Font | None = None) -> float:
+    """Width of `text` at font size 1 (em), from the glyph outlines' extent (no polygons built)."""
+    from matplotlib.font_manager import FontProperties
+    from matplotlib.textpath import TextPath
+
+    font = font or load_font()
+    if not text.strip():
+        return 0.0
+    path = TextPath((0, 0), text, size=1.0, prop=FontProperties(fname=str(font.path)))
+    return float(path.vertices[:, 0].max()) if len(path.vertices) else 0.0
 
 
 def _widen_hyphens(geom, text: str, path: str):

@@ -30,7 +30,7 @@ import itertools
 import math
 import re
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
@@ -39,10 +39,17 @@ from .. import tolerances as tol
 from ..errors import FabricationError
 from ..geometry import Polyhedron
 
-__all__ = ["PAGES", "Net", "Page", "Tab", "parse_page", "unfold"]
+__all__ = ["PAGES", "Net", "Page", "Tab", "pack_copies", "parse_page", "unfold"]
 
 #: Page sizes in millimetres (portrait).
-PAGES = {"A4": (210.0, 297.0), "LETTER": (215.9, 279.4), "A3": (297.0, 420.0)}
+PAGES = {
+    "A5": (148.0, 210.0),
+    "A4": (210.0, 297.0),
+    "A3": (297.0, 420.0),
+    "LETTER": (215.9, 279.4),
+    "LEGAL": (215.9, 355.6),
+}
+_PAGE_NAMES = {"LETTER": "Letter", "LEGAL": "Legal"}
 
 #: Default glue-tab width, mm.
 TAB_WIDTH = 5.0
@@ -86,7 +93,7 @@ class Page:
 
 
 def parse_page(spec: str) -> Page:
-    """``A4``, ``Letter``, ``A3`` or ``WxH`` in millimetres (e.g. ``200x250``).
+    """``A5``, ``A4``, ``A3``, ``Letter``, ``Legal`` or ``WxH`` in millimetres (e.g. ``200x250``).
 
     >>> parse_page("letter").width
     215.9
@@ -97,10 +104,10 @@ def parse_page(spec: str) -> Page:
     key = text.upper()
     if key in PAGES:
         w, h = PAGES[key]
-        return Page("Letter" if key == "LETTER" else key, w, h)
+        return Page(_PAGE_NAMES.get(key, key), w, h)
     m = re.fullmatch(r"(\d+(?:\.\d+)?)\s*[xX×]\s*(\d+(?:\.\d+)?)", text)
     if not m:
-        raise FabricationError(f"page {spec!r} is not A4, Letter, A3 or WxH in millimetres (e.g. 200x250)")
+        raise FabricationError(f"page {spec!r} is not A5, A4, A3, Letter, Legal or WxH in millimetres (e.g. 200x250)")
     w, h = float(m.group(1)), float(m.group(2))
     page = Page(f"{w:g}x{h:g}mm", w, h)
     pw, ph = page.printable
@@ -145,7 +152,8 @@ class Net:
     tabs : tuple of Tab
         One per cut edge.
     edge_labels : dict edge index -> str
-        The short label shared by a tab and its matching edge.
+        The letter of every cut edge, shared by its tab and the matching edge
+        (without tabs, printed on both sides of the cut).
     """
 
     poly: Polyhedron
@@ -543,6 +551,8 @@ def _place_tabs(polys, piece_of, cut_copies, width):
     (edge, face, polygon) per cut edge, or ``(partial, edge)`` naming the
     first edge that can take no tab.
     """
+    if width == 0:
+        return [], None
     pad = max(len(p) for p in polys)
     faces = np.array([np.concatenate([p, np.repeat(p[-1:], pad - len(p), axis=0)]) for p in polys])
     placed: list[tuple[int, int, np.ndarray]] = []
@@ -636,7 +646,8 @@ def unfold(
     page : Page or str
         Paper size (see :func:`parse_page`).
     tab_width : float, mm
-        Width of a glue tab before narrowing.
+        Width of a glue tab before narrowing; 0 for no tabs (every cut edge
+        is then lettered on both sides, to be taped or glued edge to edge).
     seed : int
         Seeds the candidate trees of polyhedra with too many spanning trees
         to enumerate.
@@ -657,8 +668,8 @@ def unfold(
         page = parse_page(page)
     if not (math.isfinite(mm_per_unit) and mm_per_unit > 0):
         raise FabricationError(f"mm_per_unit={mm_per_unit} must be a positive number")
-    if not (math.isfinite(tab_width) and tab_width >= TAB_MIN_WIDTH):
-        raise FabricationError(f"tab width {tab_width} mm must be at least {TAB_MIN_WIDTH:g} mm")
+    if not (math.isfinite(tab_width) and (tab_width >= TAB_MIN_WIDTH or tab_width == 0)):
+        raise FabricationError(f"tab width {tab_width} mm must be 0 (no tabs) or at least {TAB_MIN_WIDTH:g} mm")
     printable = page.printable
     local = _face_frames(poly, mm_per_unit)
     _check_size(local, printable, tab_width, size_mm)
@@ -825,17 +836,7 @@ def _finish(poly, mm_per_unit, page: Page, layout: _Layout, stats) -> Net:
         pts = np.concatenate(list(polys.values()) + [t for _, _, t in tabs])
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         pieces.append((polys, tabs, lo, hi - lo))
-    # shelf packing, tallest first
-    placement: dict[int, tuple[int, np.ndarray]] = {}
-    page_no, x, y, shelf = 0, 0.0, 0.0, 0.0
-    for k in sorted(range(len(pieces)), key=lambda k: (-pieces[k][3][1], k)):
-        w, h = pieces[k][3]
-        if x > 0 and x + w > printable[0] + 1e-9:
-            x, y, shelf = 0.0, y + shelf + PIECE_GAP, 0.0
-        if y > 0 and y + h > printable[1] + 1e-9:
-            page_no, x, y, shelf = page_no + 1, 0.0, 0.0, 0.0
-        placement[k] = (page_no, np.array([x, y]))
-        x, shelf = x + w + PIECE_GAP, max(shelf, h)
+    placement = _shelf([size for *_, size in pieces], printable)
     faces: list[np.ndarray | None] = [None] * m
     face_page = np.zeros(m, dtype=np.intp)
     raw_tabs = []
@@ -855,10 +856,20 @@ def _finish(poly, mm_per_unit, page: Page, layout: _Layout, stats) -> Net:
             face_page[f] = pg
         for e, f, t in tabs:
             raw_tabs.append((e, f, to_page(t), pg))
-    # labels in reading order of the tabs
+    # letters in reading order of the tabs (without tabs: of the first copy of each cut edge)
     raw_tabs.sort(key=lambda r: (r[3], round(r[2].mean(axis=0)[1] / 10), r[2].mean(axis=0)[0]))
-    names = [_letters(i) for i in range(len(raw_tabs))]
-    tabs_out = tuple(Tab(n, int(e), int(f), t, int(pg)) for n, (e, f, t, pg) in zip(names, raw_tabs))
+    letter_of = {e: _letters(i) for i, (e, *_) in enumerate(raw_tabs)}
+    if not raw_tabs:
+        lookup = _edge_lookup(poly)
+        firsts: dict[int, tuple] = {}
+        for k, f in enumerate(poly.faces):
+            for i, (a, b) in enumerate(_ring(f)):
+                e = lookup[_key(a, b)]
+                if e not in layout.tree and e not in firsts:
+                    mid = (faces[k][i] + faces[k][(i + 1) % len(f)]) / 2
+                    firsts[e] = (int(face_page[k]), round(mid[1] / 10), mid[0])
+        letter_of = {e: _letters(i) for i, e in enumerate(sorted(firsts, key=firsts.get))}
+    tabs_out = tuple(Tab(letter_of[e], int(e), int(f), t, int(pg)) for e, f, t, pg in raw_tabs)
     folds = np.array(
         sorted(
             e for e in layout.tree if layout.piece_of[poly.edge_faces[e, 0]] == layout.piece_of[poly.edge_faces[e, 1]]
@@ -874,9 +885,58 @@ def _finish(poly, mm_per_unit, page: Page, layout: _Layout, stats) -> Net:
         face_piece=layout.piece_of.copy(),
         fold_edges=folds,
         tabs=tabs_out,
-        edge_labels={t.edge: t.label for t in tabs_out},
+        edge_labels=letter_of,
         search=stats,
     )
+
+
+def _shelf(sizes, printable) -> dict[int, tuple[int, np.ndarray]]:
+    """Shelf packing, tallest first: item index -> (page, offset of its box from the printable corner)."""
+    placement: dict[int, tuple[int, np.ndarray]] = {}
+    page_no, x, y, shelf = 0, 0.0, 0.0, 0.0
+    for k in sorted(range(len(sizes)), key=lambda k: (-sizes[k][1], k)):
+        w, h = sizes[k]
+        if x > 0 and x + w > printable[0] + 1e-9:
+            x, y, shelf = 0.0, y + shelf + PIECE_GAP, 0.0
+        if y > 0 and y + h > printable[1] + 1e-9:
+            page_no, x, y, shelf = page_no + 1, 0.0, 0.0, 0.0
+        placement[k] = (page_no, np.array([x, y]))
+        x, shelf = x + w + PIECE_GAP, max(shelf, h)
+    return placement
+
+
+def pack_copies(net: Net, copies: int) -> tuple[Net, ...]:
+    """`copies` copies of `net`, their pieces packed together onto as few pages as the shelf packer finds.
+
+    Each copy is a :class:`Net` of its own (same faces, tabs and letters,
+    other positions); ``max(n.n_pages for n in result)`` pages in all.
+    """
+    if isinstance(copies, bool) or not isinstance(copies, (int, np.integer)) or copies < 1:
+        raise FabricationError(f"copies={copies!r} must be a whole number >= 1")
+    if copies == 1:
+        return (net,)
+    boxes = []  # (copy, piece, page, lo, size)
+    for c in range(copies):
+        for piece in range(net.n_pieces):
+            members = np.flatnonzero(net.face_piece == piece)
+            pts = np.concatenate(
+                [net.faces[f] for f in members] + [t.polygon for t in net.tabs if net.face_piece[t.face] == piece]
+            )
+            lo = pts.min(axis=0)
+            boxes.append((c, piece, lo, pts.max(axis=0) - lo))
+    placement = _shelf([b[3] for b in boxes], net.page.printable)
+    corner = np.array([net.page.margin, net.page.margin])
+    moved: list[dict[int, tuple[int, np.ndarray]]] = [{} for _ in range(copies)]
+    for i, (c, piece, lo, _) in enumerate(boxes):
+        pg, at = placement[i]
+        moved[c][piece] = (pg, corner + at - lo)
+    out = []
+    for c in range(copies):
+        shift = [moved[c][int(p)] for p in net.face_piece]
+        faces = tuple(poly + shift[f][1] for f, poly in enumerate(net.faces))
+        tabs = tuple(replace(t, polygon=t.polygon + shift[t.face][1], page=shift[t.face][0]) for t in net.tabs)
+        out.append(replace(net, faces=faces, face_page=np.array([s[0] for s in shift]), tabs=tabs))
+    return tuple(out)
 
 
 def _letters(i: int) -> str:
