@@ -24,6 +24,7 @@ BENCHMARKS = {
     "bench_validate.py": ([], ["--n", "3000"]),
     "bench_fastmodel.py": ([], ["--designs", "4", "--drops", "3000"]),
     "bench_simopt.py": ([], ["--budget", "1", "--validate", "3000"]),
+    "bench_realrolls.py": ([], ["--sims", "200"]),
 }
 
 

@@ -5,6 +5,7 @@ imports with NumPy alone; SciPy, trimesh, pybullet, manifold3d and matplotlib
 are imported by the functions that need them.
 """
 
+from .assignment import assign_values
 from .design import Design, design_to_toml, list_templates, load_design, parse_design
 from .errors import (
     DesignError,
@@ -16,12 +17,14 @@ from .errors import (
     StatsError,
     TargetError,
 )
-from .families import GEM, Family, Parameter, gem_center_of_mass_y, gem_vertices
+from .families import GEM, Family, Parameter, families, family, gem_center_of_mass_y, gem_vertices
 from .geometry import Polyhedron, face_margins, solid_angles, up_faces
 from .mass import Fill, MassProperties, mass_properties
 from .models import MODELS, face_probabilities, value_probabilities
 from .physics import PhysicsSettings, RollResult, simulate
+from .readings import markings, readings
 from .stats import GoodnessOfFit, goodness_of_fit, jsd, pearson_divergence, tvd
+from .synthesis import synthesize
 from .targets import Target, parse_target
 
 __version__ = "0.1.0"
@@ -47,21 +50,27 @@ __all__ = [
     "StatsError",
     "Target",
     "TargetError",
+    "assign_values",
     "design_to_toml",
     "face_margins",
     "face_probabilities",
+    "families",
+    "family",
     "gem_center_of_mass_y",
     "gem_vertices",
     "goodness_of_fit",
     "jsd",
     "list_templates",
     "load_design",
+    "markings",
     "mass_properties",
     "parse_design",
     "parse_target",
     "pearson_divergence",
+    "readings",
     "simulate",
     "solid_angles",
+    "synthesize",
     "tvd",
     "up_faces",
     "value_probabilities",

@@ -26,11 +26,13 @@ from typing import Any
 
 import numpy as np
 
-from . import tolerances as tol
 from .errors import DesignError, GeometryError
-from .families import family, gem_polyhedron
-from .geometry import Polyhedron, face_margins, resting_faces, up_faces
-from .mass import Fill, MassProperties
+from .families import family
+from .families.base import default_length
+from .geometry import Polyhedron, face_margins, resting_faces
+from .mass import Fill, MassProperties, mesh_mass_properties, stated
+from .meshes import ClosedMesh
+from .schema import check_design_data, check_mapping
 from .targets import Target, parse_target
 
 __all__ = [
@@ -43,13 +45,25 @@ __all__ = [
     "template_path",
 ]
 
+#: Largest design file read.
+MAX_DESIGN_BYTES = 64 << 20
+
 #: Resting face -> value of the paper's gem (colors of its Fig. 3).
 GEM_VALUES = {"f1": 3, "f2": 4, "f3": -3, "f4": -4, "f5": 0, "f6": 1, "f7": 2, "f8": -1, "f9": -2}
 
 _KEYS = {
     "name", "description", "family", "params", "target", "values", "labels", "size_mm",
-    "fill", "physics", "vertices", "faces", "mesh", "transitional",
+    "fill", "physics", "vertices", "faces", "mesh", "transitional", "center_of_mass", "inertia",
+    "merge_tolerance_mm",
 }  # fmt: skip
+
+
+#: Default merge tolerance of a mesh design's hull faces, millimetres.
+MESH_MERGE_MM = 0.01
+
+
+def _number(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
 
 
 def format_value(value: int, signed: bool) -> str:
@@ -67,7 +81,8 @@ class Design:
     ----------
     name : str
     family : str
-        ``gem``, ``convex`` or ``mesh``.
+        A family of :mod:`diefab.families` (``gem``, ``ngem``, ``prism``, ...,
+        ``convex`` or ``mesh``).
     params : mapping str -> float
         Family parameters (the gem's a, b, c, d and optional e).
     values : mapping str -> int
@@ -80,11 +95,12 @@ class Design:
         Overrides of the computed label text, keyed by the face that carries it.
     size_mm : float
         Physical size as dice makers measure it (:attr:`size_note`): the
-        gem's girdle short side (2 model units along its z); for ``convex``
-        and ``mesh`` dice, face to face when every face has a parallel
-        opposite (a d6, d8, d20: the widest such pair), else the largest
-        distance between two vertices (a d4's edge).  It never depends on
-        how the vertices are rotated.
+        gem's girdle short side (2 model units along its z); for the other
+        families their stated reference length (``Family.reference``); for
+        ``convex``, ``mesh`` and ``freeform`` dice, face to face when every
+        face has a parallel opposite (a d6, d8, d20: the widest such pair),
+        else the largest distance between two vertices (a d4's edge).  It
+        never depends on how the vertices are rotated.
     fill : Fill
     physics : mapping
         Simulation settings stored with the design (see :mod:`diefab.physics`).
@@ -95,6 +111,20 @@ class Design:
         They carry no value.  A face with no value is transitional whether
         named or not, but it must really be one: a die that can rest on a
         face needs a value for it.
+    center_of_mass : (3,) float, optional
+        The real body's centre of mass (a weighted die, a print with an
+        insert), used by every model and the simulation instead of the
+        fill's.  Model units, the design's coordinates (a ``mesh`` design:
+        the mesh file's units and coordinates).  It must lie inside the die.
+    inertia : (3, 3) float, optional
+        The real body's inertia tensor about its centre of mass, per unit
+        mass (same units, squared).  Without it the fill's inertia about
+        the fill's own centre of mass is used.
+    merge_tolerance_mm : float, optional
+        Hull triangles of a ``mesh`` (or ``convex`` without ``faces``)
+        design whose vertices lie within this many millimetres of one plane
+        become one face (default: :data:`MESH_MERGE_MM` for meshes, exact
+        coplanarity for vertex lists).
     """
 
     name: str
@@ -111,16 +141,26 @@ class Design:
     faces: tuple[tuple[int, ...], ...] | None = None
     mesh: Path | None = None
     transitional: tuple[str, ...] = ()
+    center_of_mass: tuple[float, float, float] | None = None
+    inertia: tuple[tuple[float, float, float], ...] | None = None
+    merge_tolerance_mm: float | None = None
 
     def __post_init__(self) -> None:
+        for key in ("name", "family", "target", "description"):
+            if not isinstance(getattr(self, key), str):
+                raise DesignError(f"{key}={getattr(self, key)!r} must be a string")
+        for key in ("params", "values", "labels", "physics"):
+            check_mapping(key, getattr(self, key))
         fam = family(self.family)
         object.__setattr__(self, "params", fam.check_params(self.params))
-        if not (isinstance(self.size_mm, (int, float)) and math.isfinite(self.size_mm) and self.size_mm > 0):
+        size = self.size_mm
+        if isinstance(size, bool) or not (isinstance(size, (int, float)) and math.isfinite(size) and size > 0):
             raise DesignError(f"size_mm={self.size_mm} must be a positive number of millimetres")
         if self.family == "convex" and self.vertices is None:
             raise DesignError("a convex design needs 'vertices'")
         if self.family == "mesh" and self.mesh is None:
             raise DesignError("a mesh design needs 'mesh' (a file path)")
+        self._check_body()
         values = dict(self.values) or (GEM_VALUES if self.family == "gem" else {})
         names = self.polyhedron.names
         if isinstance(self.transitional, str) or not all(isinstance(n, str) for n in self.transitional):
@@ -148,18 +188,82 @@ class Design:
                 raise DesignError(f"labels: label of face {k!r} must be a string")
         self.target_distribution  # noqa: B018 -- validate the target against the values now
 
-    # ------------------------------------------------------------------
+    def _check_body(self) -> None:
+        """Check the stated merge tolerance, centre of mass and inertia (shapes, finiteness, physics)."""
+        t = self.merge_tolerance_mm
+        if t is not None and not (_number(t) and 0 <= t <= 10):
+            raise DesignError(f"merge_tolerance_mm={t!r} must be a number of millimetres in [0, 10]")
+        if t is not None and self.family == "convex" and self.faces is not None:
+            raise DesignError("merge_tolerance_mm applies to a hull: leave it out of a design that lists 'faces'")
+        if self.center_of_mass is not None:
+            c = self.center_of_mass
+            if not (isinstance(c, (list, tuple)) and len(c) == 3 and all(map(_number, c))):
+                raise DesignError(f"center_of_mass={c!r} must be three finite numbers [x, y, z]")
+            object.__setattr__(self, "center_of_mass", tuple(float(x) for x in c))
+        if self.inertia is not None:
+            i = self.inertia
+            ok = isinstance(i, (list, tuple)) and len(i) == 3
+            ok = ok and all(isinstance(r, (list, tuple)) and len(r) == 3 and all(map(_number, r)) for r in i)
+            if not ok:
+                raise DesignError(f"inertia={i!r} must be a 3x3 table of finite numbers")
+            a = np.array(i, dtype=float)
+            if not np.allclose(a, a.T, rtol=1e-6, atol=1e-12 * np.abs(a).max()):
+                raise DesignError(f"inertia={a.tolist()} is not symmetric")
+            m = np.linalg.eigvalsh(a)
+            if m[0] <= 0 or m[2] > (m[0] + m[1]) * (1 + 1e-6):
+                raise DesignError(
+                    f"inertia has principal moments {m.tolist()}: need all > 0 and each at most the sum of "
+                    "the other two (a real body)"
+                )
+            object.__setattr__(self, "inertia", tuple(tuple(float(x) for x in r) for r in a))
+
+    @cached_property
+    def _file_mesh(self) -> ClosedMesh | None:
+        """A ``mesh`` design's body in the file's units, else None."""
+        if self.family != "mesh":
+            return None
+        try:
+            return ClosedMesh.load(self.mesh)
+        except GeometryError as exc:
+            raise DesignError(f"design {self.name!r}: {exc}") from exc
+
+    @cached_property
+    def _file_scale(self) -> float:
+        """Model units per unit of the design's own coordinates (a mesh file's units; 1 otherwise)."""
+        mesh = self._file_mesh
+        return 1.0 if mesh is None else 2.0 / float(np.ptp(mesh.vertices, axis=0).max())
+
+    @cached_property
+    def body_mesh(self) -> ClosedMesh | None:
+        """A ``mesh`` design's body in model units (its longest bounding-box side 2), else None."""
+        mesh = self._file_mesh
+        return None if mesh is None else mesh.scaled(self._file_scale)
+
     @cached_property
     def polyhedron(self) -> Polyhedron:
-        """The die in model units."""
-        if self.family == "gem":
-            return gem_polyhedron(self.params)
+        """The die in model units: for a ``mesh`` design, the convex hull it rests on."""
+        fam = family(self.family)
+        if fam.build is not None:
+            return fam.polyhedron(self.params)
         try:
-            if self.family == "convex":
-                if self.faces is None:
-                    return Polyhedron.from_points(self.vertices)
+            if self.family == "convex" and self.faces is not None:
                 return Polyhedron(np.array(self.vertices, dtype=float), self.faces)
-            return Polyhedron.from_mesh(self.mesh)
+            mm = MESH_MERGE_MM if self.merge_tolerance_mm is None and self.family == "mesh" else self.merge_tolerance_mm
+            mesh = self.family == "mesh"
+            points = self.body_mesh.vertices if mesh else np.array(self.vertices, dtype=float)
+            if mm is None:
+                return Polyhedron.from_points(points, strict=not mesh)
+            # the tolerance is in mm, and what size_mm measures depends on the merged faces: start from the
+            # largest vertex distance and merge again if the faces say the die is measured face to face
+            from scipy.spatial import ConvexHull
+            from scipy.spatial.distance import pdist
+
+            length = float(pdist(points[ConvexHull(points).vertices]).max())
+            poly = Polyhedron.from_points(points, strict=not mesh, merge_tolerance=mm * length / self.size_mm)
+            ref = default_length(poly)[0]
+            if abs(ref - length) > 1e-6 * length:
+                poly = Polyhedron.from_points(points, strict=not mesh, merge_tolerance=mm * ref / self.size_mm)
+            return poly
         except GeometryError as exc:
             raise DesignError(f"design {self.name!r}: {exc}") from exc
 
@@ -213,9 +317,25 @@ class Design:
 
     @cached_property
     def label_face(self) -> dict[str, str | None]:
-        """Resting face -> the face pointing up that shows its value (None: a vertex or edge is up)."""
+        """Resting face -> the face pointing up that shows its value (None: a vertex or edge is up).
+
+        What points up follows :func:`diefab.readings.readings`.
+        """
+        from .readings import readings
+
         poly = self.polyhedron
-        return {poly.names[k]: (None if up is None else poly.names[up]) for k, up in enumerate(up_faces(poly))}
+        return {
+            poly.names[k]: (poly.names[r.face] if r is not None and r.kind == "face" else None)
+            for k, r in enumerate(readings(poly))
+        }
+
+    @cached_property
+    def markings(self) -> list:
+        """Every text net and stl print, as :class:`diefab.readings.Marking` (face, text, corner or edge)."""
+        from .readings import markings
+
+        signed = min(self.support) < 0
+        return markings(self.polyhedron, self.values, {n: format_value(v, signed) for n, v in self.values.items()})
 
     @cached_property
     def label_of(self) -> dict[str, str]:
@@ -245,11 +365,37 @@ class Design:
         """Mass properties in model units for the design's (or the given) fill, as made.
 
         A paper die includes the glue tabs of its net, a print its engraved
-        labels (see :mod:`diefab.bodies`).
+        labels (see :mod:`diefab.bodies`).  A non-convex ``mesh`` body's come
+        from the mesh itself, a convex die's from its polyhedron; a stated ``center_of_mass`` and
+        ``inertia`` replace the computed ones (whatever the fill).
         """
-        from .bodies import body_properties
+        fill = fill or self.fill
+        mesh = self.body_mesh
+        if mesh is not None and not self._mesh_is_convex:
+            props = mesh_mass_properties(mesh, fill, mm_per_unit=self.mm_per_unit)
+        else:
+            from .bodies import body_properties
 
-        return body_properties(self, fill or self.fill)
+            props = body_properties(self, fill)
+        if self.center_of_mass is None and self.inertia is None:
+            return props
+        s = self._file_scale
+        center = None if self.center_of_mass is None else np.array(self.center_of_mass) * s
+        if center is not None:
+            poly = self.polyhedron
+            depth = poly.offsets - poly.normals @ center
+            k = int(np.argmin(depth))
+            if depth[k] <= 0:
+                raise DesignError(
+                    f"design {self.name!r}: center_of_mass {list(self.center_of_mass)} is not inside the die "
+                    f"({-depth[k] * self.mm_per_unit:.3g} mm outside face {poly.names[k]})"
+                )
+        inertia = None if self.inertia is None else np.array(self.inertia) * s**2
+        return stated(props, center, inertia)
+
+    @cached_property
+    def _mesh_is_convex(self) -> bool:
+        return self.body_mesh is not None and self.body_mesh.is_convex()
 
     def margins(self, fill: Fill | None = None) -> np.ndarray:
         """(m,) float: stability margin of each face, model units."""
@@ -292,14 +438,8 @@ def reference_length(design: Design) -> tuple[float, str]:
     """
     if design.family == "gem":
         return 2.0, "girdle short side"
-    poly = design.polyhedron
-    cos = poly.normals @ poly.normals.T
-    opposite = np.argmin(cos, axis=1)
-    if np.all(cos[np.arange(len(cos)), opposite] < -1 + tol.COPLANAR):
-        return float((poly.offsets + poly.offsets[opposite]).max()), "face to face"
-    from scipy.spatial.distance import pdist
-
-    return float(pdist(poly.vertices).max()), "largest vertex-to-vertex distance"
+    fam = family(design.family)
+    return fam.length(design.polyhedron), fam.reference_name(design.polyhedron)
 
 
 # ----------------------------------------------------------------------
@@ -335,7 +475,9 @@ def load_design(spec: str | Path) -> Design:
     path = Path(text)
     if text.endswith(".toml") or path.exists() or "/" in text or "\\" in text:
         if not path.is_file():
-            raise DesignError(f"design file {text} does not exist")
+            raise DesignError(f"design file {text} {'is not a regular file' if path.exists() else 'does not exist'}")
+        if path.stat().st_size > MAX_DESIGN_BYTES:
+            raise DesignError(f"design file {text} is larger than {MAX_DESIGN_BYTES >> 20} MiB")
         try:
             content = path.read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError) as exc:
@@ -350,6 +492,10 @@ def parse_design(content: str, *, source: str = "<string>", base: Path | None = 
         data = tomllib.loads(content)
     except tomllib.TOMLDecodeError as exc:
         raise DesignError(f"{source}: malformed TOML: {exc}") from exc
+    try:
+        check_design_data(data)
+    except DesignError as exc:
+        raise DesignError(f"{source}: {exc}") from None
     unknown = sorted(set(data) - _KEYS)
     if unknown:
         raise DesignError(f"{source}: unknown key {unknown[0]!r} (keys: {', '.join(sorted(_KEYS))})")
@@ -371,6 +517,9 @@ def parse_design(content: str, *, source: str = "<string>", base: Path | None = 
         kwargs["faces"] = tuple(tuple(f) for f in data["faces"])
     if "mesh" in data:
         kwargs["mesh"] = (base or Path.cwd()) / data["mesh"]
+    for key in ("center_of_mass", "inertia", "merge_tolerance_mm"):
+        if key in data:
+            kwargs[key] = data[key]
     if isinstance(data.get("labels"), dict) and base is not None:
         # an SVG symbol's file is found beside the design file, as a mesh is
         kwargs["labels"] = {
@@ -410,6 +559,12 @@ def design_to_toml(design: Design, *, comment: str = "") -> str:
     data["values"] = dict(design.values)
     if design.transitional:
         data["transitional"] = list(design.transitional)
+    if design.merge_tolerance_mm is not None:
+        data["merge_tolerance_mm"] = float(design.merge_tolerance_mm)
+    if design.center_of_mass is not None:
+        data["center_of_mass"] = list(design.center_of_mass)
+    if design.inertia is not None:
+        data["inertia"] = [list(r) for r in design.inertia]
     if design.labels:
         data["labels"] = dict(design.labels)
     data["fill"] = design.fill.to_mapping()

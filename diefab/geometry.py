@@ -93,7 +93,9 @@ class Polyhedron:
     # ------------------------------------------------------------------
     # construction
     @classmethod
-    def from_points(cls, points: Iterable[Sequence[float]], *, strict: bool = True) -> Polyhedron:
+    def from_points(
+        cls, points: Iterable[Sequence[float]], *, strict: bool = True, merge_tolerance: float | None = None
+    ) -> Polyhedron:
         """The convex hull of `points`, with coplanar hull triangles merged into faces.
 
         Parameters
@@ -103,6 +105,16 @@ class Polyhedron:
             If true, every point must be a vertex of the hull: a point inside
             or on the boundary means the list does not describe a convex
             polyhedron, and :class:`GeometryError` says which one.
+        merge_tolerance : float, optional
+            Merge near-coplanar hull triangles too (a scanned or printed
+            mesh's flat faces are rarely exactly flat): neighbouring
+            triangles whose vertices all lie within this distance of the
+            plane of the group's largest triangle become one face, whose
+            plane is the supporting plane with the group's mean normal.  The
+            result is the intersection of those supporting half-spaces, so
+            it contains every point and no vertex moves by much more than
+            the tolerance.  By default only exactly coplanar triangles are
+            merged and the vertices are the points themselves.
         """
         from scipy.spatial import ConvexHull, QhullError
 
@@ -117,6 +129,14 @@ class Polyhedron:
             raise GeometryError("points are degenerate (coplanar, collinear or coincident)") from exc
         if hull.volume <= tol.VOLUME * max(1.0, np.ptp(pts, axis=0).max() ** 3):
             raise GeometryError("points span no volume")
+        if merge_tolerance is not None and merge_tolerance > 0:
+            if strict and len(hull.vertices) != len(pts):
+                missing = sorted(set(range(len(pts))) - set(hull.vertices.tolist()))
+                raise GeometryError(
+                    f"point {missing[0]} {pts[missing[0]].tolist()} is not a vertex of the convex hull: "
+                    "the points are not in convex position"
+                )
+            return cls.from_points(_merged_hull(pts, hull, merge_tolerance), strict=False)
         faces = _merge_coplanar(pts, hull.simplices, hull.equations)
         used = sorted({int(i) for f in faces for i in f})
         if strict and len(used) != len(pts):
@@ -363,6 +383,47 @@ def _merge_coplanar(points: np.ndarray, simplices: np.ndarray, equations: np.nda
     return faces
 
 
+def _merged_hull(points: np.ndarray, hull, tolerance: float) -> np.ndarray:
+    """Vertices of the intersection of the supporting planes of near-coplanar hull triangle groups.
+
+    Groups grow from the largest triangle not yet taken over shared edges,
+    taking a neighbour whose three vertices lie within `tolerance` of the
+    seed triangle's plane.
+    """
+    from scipy.spatial import HalfspaceIntersection, QhullError
+
+    simplices, normals = hull.simplices, hull.equations[:, :3]
+    v = points[simplices]
+    area = 0.5 * np.linalg.norm(_cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1)
+    group = np.full(len(simplices), -1)
+    planes = []
+    for seed in np.argsort(-area, kind="stable"):
+        if group[seed] >= 0:
+            continue
+        g = len(planes)
+        n0, d0 = normals[seed], normals[seed] @ points[simplices[seed, 0]]
+        group[seed], members, stack = g, [seed], [seed]
+        while stack:
+            t = stack.pop()
+            for u in hull.neighbors[t]:
+                if group[u] < 0 and normals[u] @ n0 > 0 and np.abs(points[simplices[u]] @ n0 - d0).max() <= tolerance:
+                    group[u] = g
+                    members.append(u)
+                    stack.append(u)
+        n = (area[members, None] * normals[members]).sum(axis=0)
+        n /= np.linalg.norm(n)
+        planes.append(np.append(n, -(points[np.unique(simplices[members])] @ n).max()))
+    inside = points[hull.vertices].mean(axis=0)
+    try:
+        corners = HalfspaceIntersection(np.array(planes), inside).intersections
+    except QhullError as exc:
+        raise GeometryError(f"merging hull faces within {tolerance:g} failed: {exc}") from None
+    # several planes through (nearly) one corner give copies of it
+    scale = max(1.0, float(np.ptp(points, axis=0).max()))
+    _, keep = np.unique(np.round(corners / (tol.LENGTH * 1e3 * scale)), axis=0, return_index=True)
+    return corners[np.sort(keep)]
+
+
 def _drop_collinear(points: np.ndarray, ring: np.ndarray) -> np.ndarray:
     """Remove vertices that lie on the straight line through their neighbours."""
     p = points[ring]
@@ -520,6 +581,8 @@ class RestBasins:
     targets : (m,) int
         The resting face the flow ends on from each face's normal (the face
         itself when the die can rest on it).
+    normals : (m, 3) float
+        Outward unit face normals.
     """
 
     vertices: np.ndarray
@@ -532,6 +595,7 @@ class RestBasins:
     arc_faces: np.ndarray
     barriers: np.ndarray
     targets: np.ndarray
+    normals: np.ndarray
 
     @property
     def resting(self) -> np.ndarray:
@@ -574,7 +638,7 @@ class RestBasins:
         parts = (vertices, other, away, crosses, angles[edge], axis[edge], feet[edge], faces[edge])
         # where the flow ends from each transitional face, lowest first: it only ever descends
         targets = np.arange(m)
-        flow = cls(*parts, np.zeros(m), targets)
+        flow = cls(*parts, np.zeros(m), targets, poly.normals)
         for g in sorted(np.flatnonzero(~resting), key=lambda g: heights[g]):
             targets[g] = flow.face_of(_tipping_direction(poly, g, center))[0]
         valley = (t > 0) & (t < 1)
@@ -584,7 +648,7 @@ class RestBasins:
         for side in (0, 1):
             ends = targets[faces[saddle, side]]
             np.minimum.at(barriers, ends, reach[saddle] - heights[ends])
-        return cls(*parts, barriers, targets)
+        return cls(*parts, barriers, targets, poly.normals)
 
     #: Cells along each edge of the cube map behind :meth:`lookup`.
     LOOKUP_CELLS = 64
@@ -594,15 +658,9 @@ class RestBasins:
         """(6, c, c) int: the basin of each cube-map cell whose four corners agree, -1 where they differ."""
         c = self.LOOKUP_CELLS
         grid = np.linspace(-1.0, 1.0, c + 1)
-        u, v = np.meshgrid(grid, grid, indexing="ij")
-        corners = np.empty((6, c + 1, c + 1), dtype=np.intp)
-        for cube in range(6):
-            axis, sign = divmod(cube, 2)
-            d = np.empty((c + 1, c + 1, 3))
-            d[..., axis] = 1.0 if sign else -1.0
-            d[..., (axis + 1) % 3], d[..., (axis + 2) % 3] = u, v
-            d /= np.linalg.norm(d, axis=2)[..., None]
-            corners[cube] = self.face_of(d.reshape(-1, 3)).reshape(c + 1, c + 1)
+        u, v = (np.tile(a.ravel(), 6) for a in np.meshgrid(grid, grid, indexing="ij"))
+        cube = np.repeat(np.arange(6), (c + 1) ** 2)
+        corners = self.face_of(_cube_directions(cube, u, v)).reshape(6, c + 1, c + 1)
         a, b, e, f = corners[:, :-1, :-1], corners[:, 1:, :-1], corners[:, :-1, 1:], corners[:, 1:, 1:]
         return np.where((a == b) & (a == e) & (a == f), a, -1)
 
@@ -616,18 +674,69 @@ class RestBasins:
         """
         d = np.atleast_2d(np.asarray(down, dtype=float))
         table, c = self._cube_map, self.LOOKUP_CELLS
-        rows = np.arange(len(d))
-        axis = np.argmax(np.abs(d), axis=1)
-        major = d[rows, axis]
-        cube = 2 * axis + (major > 0)
-        scale = np.abs(major)
-        i = np.clip(((d[rows, (axis + 1) % 3] / scale + 1) * (c / 2)).astype(np.intp), 0, c - 1)
-        j = np.clip(((d[rows, (axis + 2) % 3] / scale + 1) * (c / 2)).astype(np.intp), 0, c - 1)
+        cube, u, v = _cube_coordinates(d)
+        i = np.clip(((u + 1) * (c / 2)).astype(np.intp), 0, c - 1)
+        j = np.clip(((v + 1) * (c / 2)).astype(np.intp), 0, c - 1)
         out = table[cube, i, j]
         rim = np.flatnonzero(out < 0)
         if len(rim):
             out[rim] = self.face_of(d[rim])
         return out
+
+    def shares(self, cells: int = 32, levels: int = 6) -> tuple[np.ndarray, float]:
+        """(m,) float: the share of all orientations whose downhill flow ends on each face, and its error bound.
+
+        Integrates the basins over the sphere of "down" directions (uniform
+        for a uniformly random orientation) on the cube map: each of the six
+        cube faces is split into `cells` x `cells` cells; a cell whose four
+        corners lie in one basin gives that basin its exact solid angle, the
+        others (and, for three levels, the cell holding each resting face's
+        normal, so that no small basin hides inside a cell) are split in
+        four, `levels` times.  The cells still mixed at the end are shared
+        by their corners; their total solid angle over 4 pi is returned as
+        the bound (a basin narrower than a finest cell, about
+        ``90 / (cells 2**levels)`` degrees, could still be missed).
+        """
+        total = np.zeros(len(self.targets))
+        rest = self.normals[self.resting]
+        rest_cube, rest_u, rest_v = _cube_coordinates(rest)
+
+        def corner_faces(cube: np.ndarray, u0: np.ndarray, v0: np.ndarray, size: float) -> np.ndarray:
+            """(k, 4): the basin at each corner of each cell, every distinct corner followed once."""
+            cu = np.concatenate([u0, u0, u0 + size, u0 + size])
+            cv = np.concatenate([v0, v0 + size, v0, v0 + size])
+            cc = np.tile(cube, 4)
+            n = int(round(2 / size)) + 1  # grid points along a cube face at this level
+            iu, iv = (np.round((x + 1) / size).astype(np.int64) for x in (cu, cv))
+            _, first, inverse = np.unique((cc * n + iu) * n + iv, return_index=True, return_inverse=True)
+            faces = self.face_of(_cube_directions(cc[first], cu[first], cv[first]))[inverse.ravel()]
+            return faces.reshape(4, -1).T
+
+        size = 2.0 / cells
+        grid = -1.0 + size * np.arange(cells)
+        cu, cv = (a.ravel() for a in np.meshgrid(grid, grid, indexing="ij"))
+        cube = np.repeat(np.arange(6), len(cu))
+        u0, v0 = np.tile(cu, 6), np.tile(cv, 6)
+        for level in range(levels + 1):
+            corners = corner_faces(cube, u0, v0, size)
+            forced = np.zeros(len(u0), dtype=bool)
+            if level < 3:
+                for c, a, b in zip(rest_cube, rest_u, rest_v):
+                    forced |= (cube == c) & (u0 <= a) & (a <= u0 + size) & (v0 <= b) & (b <= v0 + size)
+            uniform = np.all(corners == corners[:, :1], axis=1) & ~forced
+            np.add.at(total, corners[uniform, 0], _cell_solid_angle(u0[uniform], v0[uniform], size))
+            mixed = ~uniform
+            if level == levels:
+                area = _cell_solid_angle(u0[mixed], v0[mixed], size)
+                for k in range(4):
+                    np.add.at(total, corners[mixed, k], area / 4)
+                return total / (4 * np.pi), float(area.sum() / (4 * np.pi))
+            size /= 2
+            k = int(mixed.sum())
+            cube = np.repeat(cube[mixed], 4)
+            u0 = np.repeat(u0[mixed], 4) + np.tile([0, 0, size, size], k)
+            v0 = np.repeat(v0[mixed], 4) + np.tile([0, size, 0, size], k)
+        raise AssertionError("unreachable")
 
     def face_of(self, down: np.ndarray) -> np.ndarray:
         """(k,) int: the face whose basin each unit direction of `down` ((k, 3), body frame) lies in."""
@@ -680,3 +789,33 @@ def _tipping_direction(poly: Polyhedron, face: int, center: np.ndarray) -> np.nd
     toward /= np.linalg.norm(toward)
     down = n + tol.TIP * toward
     return (down / np.linalg.norm(down))[None]
+
+
+def _cube_directions(cube: np.ndarray, u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """(k, 3) unit directions of cube-map points: cube ``2 axis + (sign > 0)``, coordinates u, v in [-1, 1]."""
+    cube = np.asarray(cube)
+    axis = cube // 2
+    d = np.empty((len(u), 3))
+    rows = np.arange(len(u))
+    d[rows, axis] = np.where(cube % 2 == 1, 1.0, -1.0)
+    d[rows, (axis + 1) % 3], d[rows, (axis + 2) % 3] = u, v
+    return d / np.linalg.norm(d, axis=1)[:, None]
+
+
+def _cube_coordinates(d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The cube-map cube and coordinates u, v of directions `d` (k, 3): the inverse of :func:`_cube_directions`."""
+    d = np.atleast_2d(d)
+    rows = np.arange(len(d))
+    axis = np.argmax(np.abs(d), axis=1)
+    major = d[rows, axis]
+    return 2 * axis + (major > 0), d[rows, (axis + 1) % 3] / np.abs(major), d[rows, (axis + 2) % 3] / np.abs(major)
+
+
+def _cell_solid_angle(u0: np.ndarray, v0: np.ndarray, size: float) -> np.ndarray:
+    """Solid angle of the cube-map cells [u0, u0 + size] x [v0, v0 + size] (on the plane at distance 1)."""
+
+    def corner(x, y):
+        return np.arctan2(x * y, np.sqrt(1 + x * x + y * y))
+
+    u1, v1 = u0 + size, v0 + size
+    return corner(u1, v1) - corner(u0, v1) - corner(u1, v0) + corner(u0, v0)

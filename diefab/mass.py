@@ -47,10 +47,20 @@ from typing import Literal
 import numpy as np
 
 from . import tolerances as tol
-from .errors import DesignError
+from .errors import DesignError, GeometryError
 from .geometry import Polyhedron, _cross
+from .meshes import ClosedMesh
 
-__all__ = ["Fill", "LabelMass", "MassProperties", "TabShape", "inset", "mass_properties"]
+__all__ = [
+    "Fill",
+    "LabelMass",
+    "MassProperties",
+    "TabShape",
+    "inset",
+    "mass_properties",
+    "mesh_mass_properties",
+    "stated",
+]
 
 _CANONICAL = np.array([[2.0, 1.0, 1.0], [1.0, 2.0, 1.0], [1.0, 1.0, 2.0]]) / 120
 
@@ -281,7 +291,12 @@ _Moments = tuple[float, np.ndarray, np.ndarray]  # mass, first moment (3,), seco
 
 def _solid_moments(poly: Polyhedron) -> _Moments:
     """Volume, first moment and second moment ∫ x xᵀ dV of the solid."""
-    v = poly.vertices[poly.triangles]  # tetrahedra (0, a, b, c)
+    return _solid_moments_of(poly.vertices[poly.triangles])
+
+
+def _solid_moments_of(v: np.ndarray) -> _Moments:
+    """The same for the closed surface of outward triangles `v` ((t, 3, 3), corners of each)."""
+    # tetrahedra (0, a, b, c)
     det = np.einsum("ij,ij->i", v[:, 0], _cross(v[:, 1], v[:, 2]))
     volume = det.sum() / 6
     first = (det[:, None] * v.sum(axis=1)).sum(axis=0) / 24
@@ -299,9 +314,14 @@ def _sheet_moments(v: np.ndarray, weight: np.ndarray | float = 1.0) -> _Moments:
     return float(area.sum()), first, second / 12
 
 
+def _shell_moments_of(v: np.ndarray) -> _Moments:
+    """Area, first moment and second moment ∫ x xᵀ dA of the triangles `v` ((t, 3, 3), corners of each)."""
+    return _sheet_moments(v)
+
+
 def _shell_moments(poly: Polyhedron) -> _Moments:
     """Area, first moment and second moment ∫ x xᵀ dA of the surface."""
-    return _sheet_moments(poly.vertices[poly.triangles])
+    return _shell_moments_of(poly.vertices[poly.triangles])
 
 
 def _point_moments(mass: float, at: np.ndarray) -> _Moments:
@@ -351,7 +371,11 @@ def _halfspace_body(normals: np.ndarray, offsets: np.ndarray, size: float) -> Po
         hs = HalfspaceIntersection(np.column_stack([normals, -offsets]), res.x[:3])
     except QhullError:
         return None
-    return Polyhedron.from_points(hs.intersections, strict=False)
+    try:
+        return Polyhedron.from_points(hs.intersections, strict=False)
+    except GeometryError:
+        # planes of many small faces meet in near-duplicate corners: merge within a sliver of the die's size
+        return Polyhedron.from_points(hs.intersections, strict=False, merge_tolerance=tol.INSET_MERGE * max(1.0, size))
 
 
 @dataclass(frozen=True, eq=False)
@@ -622,3 +646,45 @@ def mass_properties(
 
         bed = bed_face(poly)
     return _properties(*_print_moments(poly, fill, mm_per_unit, bed, tuple(labels)))
+
+
+def mesh_mass_properties(mesh: ClosedMesh, fill: Fill | None = None, *, mm_per_unit: float = 1.0) -> MassProperties:
+    """Mass properties of the body bounded by a closed, possibly non-convex mesh, unit density.
+
+    ``solid`` and ``shell`` are exact for the mesh; ``paper`` is taken as
+    its shell (sheets of uniform card, no tabs).  ``print`` takes the
+    wall as a thin layer of the surface, :attr:`Fill.wall_thickness_mm` thick, and the rest of
+    the volume at ``infill``: exact to first order in the wall thickness
+    over the body's local size (a convex body's print is computed exactly
+    by :func:`mass_properties` on its polyhedron).
+    """
+    fill = fill or Fill()
+    v = mesh.corners
+    if fill.kind == "solid":
+        return _properties(*_solid_moments_of(v))
+    if fill.kind == "shell":
+        return _properties(*_shell_moments_of(v))
+    if fill.kind == "paper":  # card sheets on the surface (the mesh's own net has no tabs)
+        return _properties(*_shell_moments_of(v))
+    solid, surface = _solid_moments_of(v), _shell_moments_of(v)
+    wall = fill.wall_thickness_mm / mm_per_unit
+    if wall * surface[0] >= solid[0]:  # walls meet: the print is solid
+        return _properties(*solid)
+    return _properties(*(fill.infill * a + (1 - fill.infill) * wall * b for a, b in zip(solid, surface)))
+
+
+def stated(props: MassProperties, center=None, inertia=None) -> MassProperties:
+    """`props` with a stated centre of mass and, optionally, inertia per unit mass (model units).
+
+    Parameters
+    ----------
+    center : (3,) float, optional
+        Replaces the centre of mass; the inertia tensor is kept (it is the
+        body's about its own centre of mass) unless `inertia` is given.
+    inertia : (3, 3) float, optional
+        Inertia tensor about the centre of mass divided by the mass,
+        model units²: multiplied by the body's mass.
+    """
+    c = props.center if center is None else np.asarray(center, dtype=float)
+    i = props.inertia if inertia is None else props.mass * np.asarray(inertia, dtype=float)
+    return MassProperties(props.mass, c, i)

@@ -27,7 +27,15 @@ from .errors import DesignError
 from .geometry import Polyhedron, RestBasins, resting_faces, solid_angles
 from .mass import Fill
 
-__all__ = ["MODELS", "face_probabilities", "solid_angle_model", "to_values", "value_probabilities"]
+__all__ = [
+    "MODELS",
+    "basin_shares",
+    "basins_model",
+    "face_probabilities",
+    "solid_angle_model",
+    "to_values",
+    "value_probabilities",
+]
 
 Model = Callable[[Polyhedron, np.ndarray], np.ndarray]
 
@@ -47,9 +55,28 @@ def solid_angle_model(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
     return np.bincount(RestBasins.of(poly, center).targets, weights=p, minlength=len(p))
 
 
-from .fastmodel import fast_model  # noqa: E402 -- calibrated against pybullet (issue 6)
+def basin_shares(poly: Polyhedron, center: np.ndarray) -> tuple[np.ndarray, float]:
+    """(m,) float and its error bound: the share of orientations whose downhill flow ends on each face.
 
-MODELS: dict[str, Model] = {"solid-angle": solid_angle_model, "fast": fast_model}
+    The quasi-static model of Baktash et al.: a die let go in a uniformly
+    random orientation creeps downhill, without bouncing, to the resting
+    face whose basin that orientation lies in (:class:`RestBasins`).  The
+    basins are integrated on an adaptive cube map
+    (:meth:`RestBasins.shares`); the bound is the share of the sphere left
+    in cells that straddle a basin rim (under 1e-3 for the shipped and real
+    dice).
+    """
+    return RestBasins.of(poly, center).shares()
+
+
+def basins_model(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
+    """(m,) float: :func:`basin_shares` without the bound (``MODELS["basins"]``)."""
+    return basin_shares(poly, center)[0]
+
+
+from .fastmodel import fast_model  # noqa: E402 -- calibrated against pybullet
+
+MODELS: dict[str, Model] = {"solid-angle": solid_angle_model, "fast": fast_model, "basins": basins_model}
 
 
 def _model(name: str) -> Model:

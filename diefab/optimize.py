@@ -7,8 +7,8 @@ in the parameter box; the stability constraint is an extreme barrier: a point
 whose smallest face margin is below `min_margin` scores ``1 + violation``,
 far above any feasible objective, so the simplex is pushed back inside
 without the optimum being dragged onto the boundary.  A stable point that
-cannot be labelled (two resting faces showing the same top face) scores
-``1 + UNREADABLE``.
+cannot be read (:mod:`diefab.readings`: nothing clearly on top, or two
+values printed in one place) scores ``1 + UNREADABLE``.
 
 Examples
 --------
@@ -20,6 +20,7 @@ True
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
@@ -29,9 +30,10 @@ import numpy as np
 from .design import Design
 from .errors import DesignError
 from .families import family
-from .geometry import Polyhedron, face_margins, up_faces
+from .geometry import Polyhedron, face_margins
 from .mass import mass_properties
 from .models import MODELS
+from .readings import unreadable
 from .stats import jsd, pearson_divergence, tvd
 
 __all__ = ["OBJECTIVES", "OptimizationResult", "Problem", "optimize_design"]
@@ -44,8 +46,7 @@ OBJECTIVES: dict[str, Callable[[np.ndarray, np.ndarray], float]] = {
 
 #: Score of a point that violates the stability constraint (plus the violation).
 INFEASIBLE = 1.0
-#: Added to the score of a stable point that cannot be labelled (two resting
-#: faces would show the same face on top, see :attr:`diefab.design.Design.label_of`).
+#: Added to the score of a stable point that cannot be read (see :mod:`diefab.readings`).
 UNREADABLE = 0.5
 #: Score of a point that is not a valid polyhedron at all.
 INVALID = 1e6
@@ -69,6 +70,10 @@ class Problem:
         ``eq2`` (the paper's Eq. (2)), ``tvd`` or ``jsd``.
     min_margin : float
         Smallest acceptable stability margin of every face, model units.
+    correction : (m,) float, optional
+        Added to the model's face probabilities (then clipped at 0 and
+        renormalized): simulated minus modelled frequencies at a nearby
+        design, so that the model is corrected where the simulation was run.
     """
 
     design: Design
@@ -76,6 +81,7 @@ class Problem:
     model: str = "solid-angle"
     objective: str = "eq2"
     min_margin: float = 0.05
+    correction: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.model not in MODELS:
@@ -94,7 +100,7 @@ class Problem:
     def params(self, x: np.ndarray) -> dict[str, float]:
         """Unit-cube point -> parameter mapping (fixed parameters included)."""
         lo, hi = self.bounds.T
-        free = lo + np.clip(x, 0, 1) * (hi - lo)
+        free = np.clip(lo + np.clip(x, 0, 1) * (hi - lo), lo, hi)  # rounding must not step past a bound
         return {**self.design.params, **{n: float(v) for n, v in zip(self.names, free)}}
 
     def unit(self, params: dict[str, float]) -> np.ndarray:
@@ -115,19 +121,38 @@ class Problem:
         center = mass_properties(poly, design.fill, mm_per_unit=design.mm_per_unit, tabs=self._tabs).center
         margins = face_margins(poly, center)
         probs = MODELS[self.model](poly, center)
-        values = np.bincount(self._value_index, weights=probs, minlength=len(design.support))
+        if self.correction is not None:
+            probs = np.clip(probs + self.correction, 0.0, None)
+            probs = probs / probs.sum()
+        values = np.bincount(self._value_index, weights=np.where(self._resting, probs, 0.0),
+                             minlength=len(design.support))  # fmt: skip
         score = OBJECTIVES[self.objective](values, self._target)
-        violation = self.min_margin - margins.min()
+        violation = self.violation(margins)
         if violation >= 0:
             score = INFEASIBLE + violation
         elif not self._readable(poly):
             score = INFEASIBLE + UNREADABLE
         return score, values, margins
 
+    def violation(self, margins: np.ndarray) -> float:
+        """How far a die with these face margins is from feasible (< 0: feasible).
+
+        Every face with a value must hold the die by more than `min_margin`;
+        every transitional face must tip it off by more than `min_margin`.
+        """
+        mask = self._resting
+        need = self.min_margin - margins[mask].min()
+        if not mask.all():
+            need = max(need, self.min_margin + margins[~mask].max())
+        return float(need)
+
+    @cached_property
+    def _resting(self) -> np.ndarray:
+        return self.design.resting_mask()
+
     def _readable(self, poly: Polyhedron) -> bool:
-        """True if no two resting faces put the same face on top (unless the design sets its text)."""
-        tops = [u for u in up_faces(poly) if u is not None and poly.names[u] not in self.design.labels]
-        return len(tops) == len(set(tops))
+        """True if every resting face can be read (:mod:`diefab.readings`; hand-set labels excepted)."""
+        return unreadable(poly, self.design.values, tuple(self.design.labels)) is None
 
     @cached_property
     def _tabs(self):
@@ -141,8 +166,11 @@ class Problem:
 
     @cached_property
     def _value_index(self) -> np.ndarray:
+        """(m,) int: each face's value index; transitional faces (probability 0) count for the first."""
         index = {v: i for i, v in enumerate(self.design.support)}
-        return np.array([index[self.design.values[n]] for n in self.design.polyhedron.names])
+        return np.array(
+            [index[self.design.values.get(n, self.design.support[0])] for n in self.design.polyhedron.names]
+        )
 
     @cached_property
     def _target(self) -> np.ndarray:
@@ -150,11 +178,14 @@ class Problem:
 
 
 def _polyhedron(design: Design, params: dict[str, float]) -> Polyhedron:
-    if design.family == "gem":
-        from .families import gem_polyhedron
-
-        return gem_polyhedron(params)
+    fam = family(design.family)
+    if fam.build is not None:
+        return fam.polyhedron(params)
     return replace(design, params=params).polyhedron
+
+
+class _OutOfTime(Exception):
+    """The optimizer's deadline passed."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -171,8 +202,13 @@ class OptimizationResult:
 
     @property
     def binding_face(self) -> str:
-        """The face with the smallest stability margin."""
-        return self.design.polyhedron.names[int(np.argmin(self.margins))]
+        """The face with a value with the smallest stability margin."""
+        return self.design.polyhedron.names[int(np.argmin(np.where(self.design.resting_mask(), self.margins, np.inf)))]
+
+    @property
+    def min_margin(self) -> float:
+        """The smallest stability margin of a face with a value."""
+        return float(self.margins[self.design.resting_mask()].min())
 
 
 def optimize_design(
@@ -186,6 +222,8 @@ def optimize_design(
     seed: int = 0,
     name: str | None = None,
     max_evaluations: int = 4000,
+    correction: np.ndarray | None = None,
+    deadline: float | None = None,
 ) -> OptimizationResult:
     """Multi-start Nelder--Mead over the family's parameters.
 
@@ -194,17 +232,21 @@ def optimize_design(
     design : Design
         Starting design: family, values, target, fill; its own parameters are
         one of the starts.
-    model, objective, min_margin
+    model, objective, min_margin, correction
         See :class:`Problem`.
     names : sequence of str, optional
-        Parameters to optimize; default all of the family's (for the gem
-        a, b, c, d and the paper's suggested fifth, e; pass ``("a", "b",
-        "c", "d")`` for the paper's four-parameter gem with e = a b).
+        Parameters to optimize; default the family's free ones for this die
+        (:meth:`~diefab.families.Family.free_names`: for the gem a, b, c, d
+        and the paper's suggested fifth, e; pass ``("a", "b", "c", "d")`` for
+        the paper's four-parameter gem with e = a b).
     starts : int
         Random starting points, drawn with ``numpy.random.default_rng(seed)``
         uniformly in the box, in addition to the design itself.
     max_evaluations : int
         Limit per start.
+    deadline : float, optional
+        A :func:`time.monotonic` time: the search stops there with the best
+        point seen so far.
 
     Returns
     -------
@@ -222,15 +264,21 @@ def optimize_design(
         raise DesignError(f"starts={starts} must be >= 0")
     fam = family(design.family)
     if names is None:
-        names = [p.name for p in fam.parameters]
-    problem = Problem(design, tuple(names), model, objective, min_margin)
+        names = fam.free_names(design.params)
+    problem = Problem(design, tuple(names), model, objective, min_margin, correction)
     rng = np.random.default_rng(seed)
     x0s = [problem.unit(fam.complete(design.params)), *rng.random((starts, len(names)))]
     evaluations = 0
     best_x, best_f, feasible = None, np.inf, 0
+    seen = {"x": None, "f": np.inf}
 
     def score(x: np.ndarray) -> float:
-        return problem.evaluate(problem.params(x))[0]
+        if deadline is not None and time.monotonic() > deadline:
+            raise _OutOfTime
+        f = problem.evaluate(problem.params(x))[0]
+        if f < seen["f"]:
+            seen["x"], seen["f"] = np.clip(x, 0, 1), f
+        return f
 
     def simplex(x0: np.ndarray):
         return minimize(
@@ -241,23 +289,28 @@ def optimize_design(
             options={"xatol": 1e-5, "fatol": 1e-8, "maxfev": max_evaluations, "adaptive": len(names) > 4},
         )
 
-    for x0 in x0s:
-        res = simplex(x0)
-        evaluations += res.nfev
-        feasible += res.fun < INFEASIBLE
-        if res.fun < best_f:
+    try:
+        for x0 in x0s:
+            seen["f"] = np.inf
+            res = simplex(x0)
+            evaluations += res.nfev
+            feasible += res.fun < INFEASIBLE
+            if res.fun < best_f:
+                best_x, best_f = res.x, float(res.fun)
+        # A simplex that has collapsed against the stability barrier often stops
+        # short; restarting it from the best point with a fresh simplex is the
+        # standard remedy.
+        for _ in range(POLISH_RESTARTS):
+            if best_x is None:
+                break
+            res = simplex(best_x)
+            evaluations += res.nfev
+            if not res.fun < best_f - 1e-12:
+                break
             best_x, best_f = res.x, float(res.fun)
-    # A simplex that has collapsed against the stability barrier often stops
-    # short; restarting it from the best point with a fresh simplex is the
-    # standard remedy.
-    for _ in range(POLISH_RESTARTS):
-        if best_x is None:
-            break
-        res = simplex(best_x)
-        evaluations += res.nfev
-        if not res.fun < best_f - 1e-12:
-            break
-        best_x, best_f = res.x, float(res.fun)
+    except _OutOfTime:  # keep the best point seen, in the interrupted simplex too
+        if seen["f"] < best_f:
+            best_x, best_f = seen["x"], float(seen["f"])
     if best_x is None or best_f >= INFEASIBLE:
         raise DesignError(
             f"no stable design found from {len(x0s)} starts with min_margin={min_margin:g}: "
@@ -271,7 +324,7 @@ def optimize_design(
         name=name or f"{design.name}-{model}-opt",
         description=(
             f"{design.name} optimized for {design.target} under the {model} model "
-            f"({objective} = {f:.3g}, min margin {margins.min():.3f})"
+            f"({objective} = {f:.3g}, min margin {margins[design.resting_mask()].min():.3f})"
         ),
     )
     return OptimizationResult(result_design, f, values, margins, evaluations, len(x0s), feasible)

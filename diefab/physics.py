@@ -28,8 +28,10 @@ diefab.errors.PhysicsError: physics friction=-1.0 must be a finite number >= 0
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+import signal
 import sys
 import time
 from collections.abc import Callable, Mapping
@@ -104,17 +106,22 @@ class PhysicsSettings:
     still_speed, still_spin : float
         A die is still when its speed (units/s) and spin (rad/s) are below these.
     settle_time : float
-        A die still this long (s) with a face within ``face_tolerance`` of
-        straight down has landed on that face.
+        Without the energy rule (``energy_fraction`` 0), a die still this
+        long (s) on a face it can rest on, within ``face_tolerance`` of
+        straight down, has landed on that face.  With it, a die has landed
+        when it can no longer leave its face (see ``energy_fraction``) or
+        has been still on it for ``cocked_time``: a short still window
+        counts a die toppling slowly off a face as resting on it.
     cocked_time : float
         A die still this long (s) with no face down is cocked (a die
         momentarily balanced on an edge can be still for a short while).
     energy_fraction : float
-        Fast-path early stop: a die whose orientation lies in face f's basin
+        The landing rule: a die whose orientation lies in face f's basin
         (:class:`diefab.geometry.RestBasins`) has landed on f once its kinetic
         energy plus potential energy above rest on f is below this fraction
-        of the basin's barrier (its lowest saddle); 0 turns the early stop
-        off.  The rest is a margin for the engine's energy errors.  In [0, 1).
+        of the basin's barrier (its lowest saddle): it can no longer leave
+        f.  0 turns the rule off (``settle_time`` then decides).  The rest
+        is a margin for the engine's energy errors.  In [0, 1).
     time_limit : float
         A die still moving after this many seconds is unsettled.
     face_tolerance : float
@@ -185,6 +192,8 @@ class PhysicsSettings:
     @classmethod
     def from_mapping(cls, mapping: Mapping[str, Any] | None, **overrides: Any) -> PhysicsSettings:
         """Settings from a design's ``[physics]`` table, then `overrides` (None values are ignored)."""
+        if mapping is not None and not isinstance(mapping, Mapping):
+            raise PhysicsError(f"physics settings {mapping!r} are not a table of name = value")
         data = dict(mapping or {})
         data.update({k: v for k, v in overrides.items() if v is not None})
         known = {f.name for f in fields(cls)}
@@ -214,7 +223,7 @@ class RollResult:
         Drops that came to rest on each face.
     cocked, unsettled : int
         Drops at rest on no face / still moving at the time limit.
-    outcomes : (n,) int8
+    outcomes : (n,) int32
         Per drop: the face index, -1 cocked or -2 unsettled (drop *i* is
         the same for the same seed whatever the workers).
     seconds : float
@@ -377,19 +386,78 @@ def _pool(workers: int):
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
-        from .world import worker_signals
-
         # fork starts a worker in milliseconds and needs no `if __name__ == "__main__"` guard in the
         # caller's script; the parent never holds a pybullet world the children would touch
         method = "fork" if sys.platform == "linux" else "spawn"
-        _POOL = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method), initializer=worker_signals)
-        _POOL_SIZE = workers
+        # Start the workers now, with the stop signals held back: an interrupt raised inside a fork
+        # hook (logging's lock release) is swallowed by Python, and the run would go on.
+        with _signals_held():
+            _POOL = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method),
+                                        initializer=_worker_start, initargs=(os.getpid(),))  # fmt: skip
+            _POOL_SIZE = workers
+            _POOL.submit(int).result()
         if not _ATEXIT:
             import atexit
 
             atexit.register(shutdown_pool)  # before the interpreter tears down what the pool needs
             _ATEXIT.append(True)
     return _POOL
+
+
+_STOP_SIGNALS = {getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)}
+
+
+@contextlib.contextmanager
+def _signals_held():
+    """Hold back Ctrl-C, SIGTERM and SIGHUP in this thread (delivered when the block ends)."""
+    import threading
+
+    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+def _worker_start(parent: int) -> None:
+    """Worker initializer: the parent's signal handling, and death with the parent.
+
+    A worker whose parent is killed (SIGKILL, SIGHUP, a crash) must not live
+    on, reparented, holding a core: on Linux the kernel sends it SIGKILL when
+    the parent dies (``prctl(PR_SET_PDEATHSIG)``); elsewhere a daemon thread
+    polls the parent's pid.
+    """
+    from .world import worker_signals
+
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, _STOP_SIGNALS)  # held back while the parent forked
+    worker_signals()
+    if not _die_with_parent() or os.getppid() != parent:  # no prctl, or the parent is already gone
+        import threading
+
+        threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
+
+
+def _die_with_parent() -> bool:
+    """Ask Linux to SIGKILL this process when its parent dies; False where that is not possible."""
+    if not sys.platform.startswith("linux"):
+        return False
+    import ctypes
+
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        return libc.prctl(1, signal.SIGKILL, 0, 0, 0) == 0  # 1 = PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return False
+
+
+def _watch_parent(parent: int, interval: float = 0.5) -> None:
+    while os.getppid() == parent:
+        time.sleep(interval)
+    os._exit(1)
 
 
 def shutdown_pool(kill: bool = False) -> None:
@@ -411,12 +479,13 @@ def _batches(n: int, workers: int) -> list[tuple[int, int]]:
     return [(start, min(start + size, n)) for start in range(0, n, size)]
 
 
-def dask_client(scheduler):
+def dask_client(scheduler, timeout: float = 3.0):
     """``(client, owned)``: a Dask client for `scheduler` (an address or a ``distributed.Client``).
 
     ``owned`` is True when the client was opened here (the caller closes it).
-    An unreachable address fails within about three seconds with a
-    :class:`PhysicsError`.
+    An address where no Dask scheduler answers fails within about `timeout`
+    seconds (twice that at worst) with a :class:`PhysicsError`: nothing
+    listening, a server that stays silent, or one that sends something else.
     """
     try:
         from distributed import Client
@@ -424,11 +493,72 @@ def dask_client(scheduler):
         raise PhysicsError("--scheduler needs Dask: pip install 'dask[distributed]'") from exc
     if isinstance(scheduler, Client):
         return scheduler, False
+    if not isinstance(scheduler, str) or not scheduler.strip():
+        raise PhysicsError(f"scheduler address {scheduler!r} is not an address such as tcp://host:8786")
+    _probe_scheduler(scheduler, timeout)
     try:
-        return Client(str(scheduler), timeout="3s"), True
-    except (OSError, TimeoutError, ValueError, TypeError) as exc:
+        return Client(scheduler, timeout=f"{timeout}s"), True
+    except (OSError, TimeoutError, ValueError, TypeError, MemoryError) as exc:
         reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise PhysicsError(f"cannot reach Dask scheduler {scheduler!r}: {reason}") from None
+
+
+#: Largest first message a Dask scheduler sends (its handshake is a few hundred bytes).
+_HANDSHAKE_MAX = 1 << 20
+
+
+def _probe_scheduler(address: str, timeout: float) -> None:
+    """Check within `timeout` that a plain TCP `address` greets like a Dask scheduler.
+
+    Dask's TCP comm starts with both ends sending a handshake: an 8-byte
+    length, then that many bytes.  distributed waits for it without a time
+    limit and allocates whatever length arrives, so a silent server (an HTTP
+    server waits for a request) hangs the client and a chatty one makes it
+    allocate exabytes.  Other schemes (tls://, ucx://, ...) are left to
+    distributed's own timeout.
+    """
+    import socket
+    import struct
+
+    from distributed.comm import parse_address, parse_host_port
+
+    try:
+        scheme, location = parse_address(address)
+        if scheme != "tcp":
+            return
+        host, port = parse_host_port(location, default_port=8786)
+    except (ValueError, TypeError) as exc:
+        raise PhysicsError(f"scheduler address {address!r} is not valid: {exc}") from None
+
+    def fail(reason: str) -> None:
+        raise PhysicsError(f"cannot reach Dask scheduler {address!r}: {reason}")
+
+    deadline = time.monotonic() + timeout
+    try:
+        with socket.create_connection((host, port), timeout=timeout) as sock:
+
+            def receive(size: int) -> bytes:
+                data = b""
+                while len(data) < size:
+                    left = deadline - time.monotonic()
+                    if left <= 0:
+                        raise TimeoutError
+                    sock.settimeout(left)
+                    chunk = sock.recv(min(size - len(data), 65536))
+                    if not chunk:
+                        fail("the server closed the connection without a Dask handshake")
+                    data += chunk
+                return data
+
+            try:
+                (size,) = struct.unpack("Q", receive(8))
+                if not 0 < size <= _HANDSHAKE_MAX:
+                    fail("the server is not a Dask scheduler (it does not speak Dask's protocol)")
+                receive(size)
+            except TimeoutError:
+                fail(f"no Dask handshake within {timeout:g} s (is it a Dask scheduler?)")
+    except OSError as exc:
+        fail(f"{exc.strerror or exc}")
 
 
 def _check_run(design: Design, n, seed, workers, settings: PhysicsSettings) -> int:
@@ -500,7 +630,7 @@ def simulate(
             f"must exceed the die's radius {body.radius:.3f} so that it starts above the ground"
         )
     n, seed = int(n), int(seed)
-    outcomes = np.empty(n, dtype=np.int8)
+    outcomes = np.empty(n, dtype=np.int32)
     batches = _batches(n, 1 if scheduler is None and workers == 1 else workers)
     done = 0
     started = time.perf_counter()

@@ -1,4 +1,4 @@
-"""Design by simulation: fit a family's parameters to pybullet drop frequencies (issue 6).
+"""Design by simulation: fit a family's parameters to pybullet drop frequencies.
 
 The paper's final die came from minimizing Eq. (2) with simulated
 frequencies (1000 drops per evaluation).  This module does that with the
@@ -31,6 +31,7 @@ uninterrupted run would have taken, losing at most the evaluation in flight.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -122,6 +123,11 @@ class RunSpec:
         Require a readable die: every resting face must put a different face
         on top (:attr:`diefab.design.Design.label_of`); a candidate that
         fails scores ``1 + UNLABELABLE`` and is not simulated.
+    budget_minutes : float, optional
+        Wall-time budget of the whole run (not of the trajectory: a resumed
+        run continues with it unless given a new one).
+    max_evaluations : int, optional
+        Stop after this many evaluations in all.
     """
 
     design_toml: str
@@ -138,6 +144,8 @@ class RunSpec:
     start: str = "fast"
     labels: bool = True
     format: int = RUN_FORMAT
+    budget_minutes: float | None = None
+    max_evaluations: int | None = None
 
     def __post_init__(self) -> None:
         def bad(msg: str) -> None:
@@ -161,6 +169,16 @@ class RunSpec:
             bad(f"min_margin={self.min_margin} must be a non-negative number")
         if not (math.isfinite(self.sigma0) and 0 < self.sigma0 <= 0.5):
             bad(f"sigma0={self.sigma0} must be in (0, 0.5]")
+        if self.budget_minutes is not None and (
+            isinstance(self.budget_minutes, bool) or not isinstance(self.budget_minutes, (int, float))
+            or not (math.isfinite(self.budget_minutes) and self.budget_minutes > 0)
+        ):  # fmt: skip
+            bad(f"budget_minutes={self.budget_minutes!r} must be a positive number")
+        if self.max_evaluations is not None and (
+            isinstance(self.max_evaluations, bool) or not isinstance(self.max_evaluations, int)
+            or self.max_evaluations <= 0
+        ):  # fmt: skip
+            bad(f"max_evaluations={self.max_evaluations!r} must be a positive integer")
         if len(self.x0) != len(self.names) or not self.names:
             bad(f"x0 has {len(self.x0)} coordinates for parameters {self.names}")
 
@@ -209,8 +227,6 @@ class SimulationObjective:
         self.problem = Problem(self.design, spec.names, "solid-angle", spec.objective, spec.min_margin)
         self.settings = PhysicsSettings.from_mapping(spec.physics)
         self.workers, self.scheduler = workers, scheduler
-        index = {v: i for i, v in enumerate(self.design.support)}
-        self._value_index = np.array([index[self.design.values[n]] for n in self.design.polyhedron.names])
         self._target = self.design.target_distribution.aligned(self.design.support)
 
     @property
@@ -230,10 +246,12 @@ class SimulationObjective:
         except DesignError:
             return {**record, "objective": INVALID, "feasible": False, "min_margin": None}
         center = mass_properties(poly, self.design.fill, mm_per_unit=self.design.mm_per_unit).center
-        margin = float(face_margins(poly, center).min())
+        margins = face_margins(poly, center)
+        margin = float(margins[self.design.resting_mask()].min())
         record["min_margin"] = margin
-        if margin <= self.spec.min_margin:
-            return {**record, "objective": INFEASIBLE + self.spec.min_margin - margin, "feasible": False}
+        violation = self.problem.violation(margins)
+        if violation >= 0:
+            return {**record, "objective": INFEASIBLE + violation, "feasible": False}
         candidate = replace(self.design, params=params)
         if self.spec.labels:
             try:
@@ -244,7 +262,7 @@ class SimulationObjective:
             candidate, int(drops), seed=self.spec.seed, workers=self.workers, settings=self.settings,
             scheduler=self.scheduler,
         )  # fmt: skip
-        counts = np.bincount(self._value_index, weights=result.face_counts, minlength=self.k)
+        counts = result.value_counts(candidate)
         q = counts / max(counts.sum(), 1)
         return {
             **record,
@@ -541,12 +559,36 @@ class RunLog:
         self.spec_path = self.folder / "run.json"
         self.path = self.folder / "evaluations.jsonl"
         self._fh = None
+        self._created = False  # create() made the folder itself
+
+    def holds_run(self) -> bool:
+        """True when the folder holds a run with at least one evaluation (an empty start can be replaced)."""
+        try:
+            return self.path.stat().st_size > 0
+        except FileNotFoundError:
+            return False
 
     def create(self, spec: RunSpec) -> None:
-        if self.path.exists():
+        if self.holds_run():
             raise RunError(f"{self.folder} already holds a run: resume it with --resume {self.folder} or pick --name")
+        self._created = not self.folder.exists()
         atomic_write(self.spec_path, spec.to_json())
         atomic_write(self.path, b"")
+
+    def update(self, spec: RunSpec) -> None:
+        """Rewrite ``run.json`` (a resumed run's new budget)."""
+        atomic_write(self.spec_path, spec.to_json())
+
+    def discard(self, *others: Path) -> None:
+        """Remove a run that never logged an evaluation: its files, `others`, and the folder if this made it."""
+        if self.holds_run():
+            return
+        self.close()
+        for path in (self.spec_path, self.path, *others):
+            Path(path).unlink(missing_ok=True)
+        if self._created:
+            with contextlib.suppress(OSError):
+                self.folder.rmdir()
 
     def spec(self) -> RunSpec:
         if not self.folder.is_dir():

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -22,9 +23,13 @@ from pathlib import Path
 import numpy as np
 
 from .errors import StatsError
+from .tolerances import PROBABILITY_SUM
 
 __all__ = [
+    "MAX_COUNT",
     "GoodnessOfFit",
+    "check_counts",
+    "check_probabilities",
     "chi2_power",
     "counts_from_rolls",
     "expected_jsd",
@@ -39,6 +44,12 @@ __all__ = [
     "rolls_for_power",
     "tvd",
 ]
+
+
+#: Most rolls in one set of counts (multinomial sampling works in 64-bit integers).
+MAX_COUNT = 10**15
+#: Largest roll log read (about 50 million rolls).
+MAX_LOG_BYTES = 100 << 20
 
 
 def pearson_divergence(q: np.ndarray, p: np.ndarray) -> float:
@@ -102,7 +113,8 @@ def goodman_intervals(counts: Sequence[int], alpha: float = 0.05) -> np.ndarray:
     """
     from scipy.stats import chi2
 
-    x = np.asarray(counts, dtype=float)
+    _check_alpha(alpha)
+    x = check_counts(counts).astype(float)
     n, k = x.sum(), len(x)
     a = chi2.ppf(1 - alpha / k, 1)
     half = np.sqrt(a * (a + 4 * x * (n - x) / n))
@@ -241,6 +253,46 @@ class GoodnessOfFit:
         return bool(np.any(self.expected[self.target > 0] < 5))
 
 
+def check_counts(counts) -> np.ndarray:
+    """(k,) int64 counts: whole, non-negative, at most :data:`MAX_COUNT` in all."""
+    try:
+        x = np.asarray(counts)
+    except (TypeError, ValueError) as exc:
+        raise StatsError(f"counts {counts!r} are not a list of numbers") from exc
+    if x.ndim != 1 or x.size == 0:
+        raise StatsError(f"counts must be a non-empty list of numbers, got shape {x.shape}")
+    values = x.tolist()
+    for v in values:
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or v != int(v):
+            raise StatsError(f"counts must be whole numbers, got {v!r}")
+    values = [int(v) for v in values]
+    if any(v < 0 for v in values):
+        raise StatsError(f"counts must not be negative, got {values}")
+    if sum(values) > MAX_COUNT:
+        raise StatsError(f"{sum(values):.3g} rolls in all is more than the {MAX_COUNT:.0e} diefab can count")
+    return np.array(values, dtype=np.int64)
+
+
+def check_probabilities(p, name: str = "probabilities") -> np.ndarray:
+    """(k,) float probabilities: finite, non-negative, summing to 1."""
+    try:
+        q = np.asarray(p, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise StatsError(f"{name} {p!r} are not numbers") from exc
+    if q.ndim != 1 or q.size == 0:
+        raise StatsError(f"{name} must be a non-empty list of numbers, got shape {q.shape}")
+    if not np.all(np.isfinite(q)) or np.any(q < 0):
+        raise StatsError(f"{name} must be finite and non-negative")
+    if abs(q.sum() - 1) > PROBABILITY_SUM:
+        raise StatsError(f"{name} sum to {q.sum():.6g}, not 1")
+    return q
+
+
+def _check_alpha(alpha) -> None:
+    if isinstance(alpha, bool) or not isinstance(alpha, (int, float, np.floating)) or not 0 < alpha < 1:
+        raise StatsError(f"alpha={alpha!r} must be a number in (0, 1)")
+
+
 def _chi2_stat(counts: np.ndarray, expected: np.ndarray) -> np.ndarray:
     return (((counts - expected) ** 2) / expected).sum(axis=-1)
 
@@ -271,23 +323,23 @@ def goodness_of_fit(
     """
     from scipy.stats import chi2
 
-    x = np.asarray(counts)
-    p = np.asarray(target, dtype=float)
-    if x.shape != p.shape or x.ndim != 1:
+    x = check_counts(counts)
+    p = check_probabilities(target, "target")
+    if x.shape != p.shape:
         raise StatsError(f"{x.size} counts for {p.size} target values")
-    if not np.issubdtype(x.dtype, np.integer):
-        if not np.all(np.isfinite(x)) or np.any(x != np.round(x)):
-            raise StatsError("counts must be whole numbers")
-        x = x.astype(np.int64)
-    if np.any(x < 0):
-        raise StatsError(f"counts must not be negative, got {x.tolist()}")
+    _check_alpha(alpha)
+    if isinstance(mc_samples, bool) or not isinstance(mc_samples, (int, np.integer)) or not 1 <= mc_samples <= 10**7:
+        raise StatsError(f"mc_samples={mc_samples!r} must be an integer in [1, 10^7]")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise StatsError(f"seed={seed!r} must be an integer >= 0")
     n = int(x.sum())
     if n == 0:
         raise StatsError("no rolls: all counts are zero")
-    if np.any((p == 0) & (x > 0)):
-        k = int(np.argmax((p == 0) & (x > 0)))
-        raise StatsError(f"value number {k + 1} has target probability 0 but was rolled {x[k]} times")
+    # a value the target never rolls, rolled: the target is rejected outright (p = 0 exactly)
+    impossible = bool(np.any((p == 0) & (x > 0)))
     live = p > 0
+    if live.sum() < 2:
+        raise StatsError("the target gives only one value a chance: there is nothing to test")
     xs, ps = x[live], p[live]
     expected = n * ps
     stat = float(_chi2_stat(xs, expected))
@@ -297,6 +349,8 @@ def goodness_of_fit(
     nz = xs > 0
     g = float(2 * (xs[nz] * np.log(xs[nz] / expected[nz])).sum())
     obs = x / n
+    if impossible:
+        stat, g, p_mc = np.inf, np.inf, 0.0
     return GoodnessOfFit(
         counts=x,
         target=p,
@@ -319,22 +373,31 @@ def goodness_of_fit(
 
 
 def parse_counts(text: str) -> np.ndarray:
-    """Counts from text such as ``0,20,48`` or ``0 20 48``."""
-    items = [s for s in re.split(r"[,\s;]+", text.strip()) if s]
-    if not items:
+    """Counts from text such as ``0,20,48`` or ``0 20 48``; an empty field is an error."""
+    if not isinstance(text, str):
+        raise StatsError(f"counts {text!r} are not text")
+    stripped = text.strip()
+    if not stripped:
         raise StatsError("no counts given")
+    items = re.split(r"\s*[,;]\s*|\s+", stripped)
     out = []
-    for s in items:
-        try:
-            value = float(s)
-        except ValueError:
-            raise StatsError(f"count {s!r} is not a number") from None
-        if not np.isfinite(value) or value != int(value):
-            raise StatsError(f"count {s!r} is not a whole number")
+    for k, s in enumerate(items, start=1):
+        if not s:
+            raise StatsError(f"count number {k} is empty in {_short(text)!r}")
+        number = re.fullmatch(r"[+-]?(\d+(\.\d*)?|\.\d+)([eE][+-]?\d{1,4})?", s) if len(s) <= 64 else None
+        value = float(s) if number else math.nan
+        if not (math.isfinite(value) and value == int(value)):
+            raise StatsError(f"count {_short(s)!r} is not a whole number")
         if value < 0:
             raise StatsError(f"count {s!r} is negative")
+        if value > MAX_COUNT:
+            raise StatsError(f"count {_short(s)!r} is more than the {MAX_COUNT:.0e} rolls diefab can count")
         out.append(int(value))
-    return np.array(out, dtype=np.int64)
+    return check_counts(out)
+
+
+def _short(text: str, width: int = 40) -> str:
+    return text if len(text) <= width else text[: width - 3] + "..."
 
 
 _HEADER_NAMES = ("value", "roll", "result", "outcome", "face")
@@ -343,7 +406,9 @@ _HEADER_NAMES = ("value", "roll", "result", "outcome", "face")
 def _parse_value(token: str, where: str) -> int:
     t = token.strip().replace("\u2212", "-").replace("\u2013", "-")
     if not re.fullmatch(r"[+-]?\d+", t):
-        raise StatsError(f"{where}: {token.strip()!r} is not a whole-number roll")
+        raise StatsError(f"{where}: {_short(token.strip())!r} is not a whole-number roll")
+    if len(t.lstrip("+-").lstrip("0")) > 9:
+        raise StatsError(f"{where}: {_short(token.strip())!r} is not a die value (magnitude at most 10^9)")
     return int(t)
 
 
@@ -361,6 +426,10 @@ def read_rolls(path: str | Path) -> np.ndarray:
         The rolls in order.
     """
     path = Path(path)
+    if path.exists() and not path.is_file():
+        raise StatsError(f"roll log {path} is not a regular file")
+    if path.is_file() and path.stat().st_size > MAX_LOG_BYTES:
+        raise StatsError(f"roll log {path} is larger than {MAX_LOG_BYTES >> 20} MiB")
     try:
         text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:

@@ -35,7 +35,10 @@ import numpy as np
 
 from .errors import TargetError
 
-__all__ = ["Target", "parse_target"]
+__all__ = ["MAX_VALUE", "Target", "parse_target"]
+
+#: Largest magnitude of a die value.
+MAX_VALUE = 1e9
 
 
 @dataclass(frozen=True, eq=False)
@@ -86,11 +89,12 @@ def _normalized(spec: str, values, weights) -> Target:
         raise TargetError(f"target {spec!r} has a weight that is not finite")
     if np.any(weights < 0):
         raise TargetError(f"target {spec!r} has a negative weight")
-    if weights.sum() <= 0:
+    if weights.max() <= 0:
         raise TargetError(f"target {spec!r} has all weights zero")
     if len(set(values.tolist())) != len(values):
         raise TargetError(f"target {spec!r} lists a value twice")
     order = np.argsort(values)
+    weights = weights / weights.max()  # weights near the largest float would overflow their sum
     return Target(spec, values[order], weights[order] / weights.sum())
 
 
@@ -99,6 +103,12 @@ def _number(text: str, spec: str) -> float:
         return float(text)
     except ValueError:
         raise TargetError(f"target {spec!r}: {text!r} is not a number") from None
+
+
+def _integer(v) -> int:
+    if isinstance(v, (bool, str)) or int(v) != v:
+        raise ValueError(v)
+    return int(v)
 
 
 def parse_target(spec: str, values: Sequence[int] | None = None) -> Target:
@@ -118,6 +128,13 @@ def parse_target(spec: str, values: Sequence[int] | None = None) -> Target:
         If the specification is unknown, malformed, not a distribution, or
         does not fit `values`.
     """
+    if not isinstance(spec, str):
+        raise TargetError(f"target {spec!r} is not a string (a name such as 4df, or weights such as 1,4,10)")
+    if values is not None:
+        try:
+            values = [_integer(v) for v in values]
+        except (TypeError, ValueError):
+            raise TargetError(f"the design's values {values!r} are not a sequence of integers") from None
     text = spec.strip().lower().replace("\u2212", "-")
     target = _parse(text, spec, values)
     if values is not None:
@@ -126,7 +143,7 @@ def parse_target(spec: str, values: Sequence[int] | None = None) -> Target:
 
 
 def _parse(text: str, spec: str, values: Sequence[int] | None) -> Target:
-    if m := re.fullmatch(r"(\d+)d(f|\d+)", text):
+    if m := re.fullmatch(r"(\d{1,9})d(f|\d{1,9})", text):
         n = int(m[1])
         if not 1 <= n <= 100:
             raise TargetError(f"target {spec!r}: number of dice must be 1..100")
@@ -136,18 +153,18 @@ def _parse(text: str, spec: str, values: Sequence[int] | None) -> Target:
         if not 2 <= sides <= 1000:
             raise TargetError(f"target {spec!r}: dice need 2..1000 sides")
         return _normalized(spec, *_dice_sum(n, range(1, sides + 1)))
-    if m := re.fullmatch(r"binomial:(\d+)(?::([0-9.eE+-]+))?", text):
+    if m := re.fullmatch(r"binomial:(\d{1,9})(?::([0-9.eE+-]+))?", text):
         n, p = int(m[1]), _number(m[2], spec) if m[2] else 0.5
         if not (1 <= n <= 1000 and 0 < p < 1):
             raise TargetError(f"target {spec!r}: need 1 <= N <= 1000 and 0 < P < 1")
         k = np.arange(n + 1)
         return _normalized(spec, k, [comb(n, int(i)) * p**i * (1 - p) ** (n - i) for i in k])
-    if m := re.fullmatch(r"uniform:(\d+)", text):
+    if m := re.fullmatch(r"uniform:(\d{1,9})", text):
         n = int(m[1])
         if not 2 <= n <= 1000:
             raise TargetError(f"target {spec!r}: need 2 <= N <= 1000")
         return _normalized(spec, np.arange(1, n + 1), np.ones(n))
-    if m := re.fullmatch(r"coins:(\d+)", text):
+    if m := re.fullmatch(r"coins:(\d{1,9})", text):
         n = int(m[1])
         if n % 2 or not 8 <= n <= 1000:
             raise TargetError(f"target {spec!r}: need an even number of coins, at least 8")
@@ -160,8 +177,8 @@ def _parse(text: str, spec: str, values: Sequence[int] | None) -> Target:
         if all(":" in s for s in items):
             pairs = [s.split(":") for s in items]
             keys = [_number(v, spec) for v, _ in pairs]
-            if any(k != int(k) for k in keys):
-                raise TargetError(f"target {spec!r}: values must be integers")
+            if any(not (abs(k) <= MAX_VALUE and k == int(k)) for k in keys):
+                raise TargetError(f"target {spec!r}: values must be integers of magnitude at most {MAX_VALUE:g}")
             return _normalized(spec, [int(k) for k in keys], [_number(w, spec) for _, w in pairs])
         if any(":" in s for s in items):
             raise TargetError(f"target {spec!r} mixes value:weight pairs and bare weights")

@@ -16,6 +16,8 @@ COPLANAR = 1e-7
 REST_MARGIN = 1e-9
 #: Tilt (radians) of the first step of a die tipping off a transitional face.
 TIP = 1e-6
+#: Relative distance within which the faces of an inset polyhedron are merged.
+INSET_MERGE = 1e-7
 #: Smallest face area, edge length and volume that are not degenerate.
 AREA = 1e-12
 LENGTH = 1e-9
@@ -32,3 +34,6 @@ STL_VOLUME_REL = 0.005
 #: Paper nets (mm): two flat polygons overlapping by no more than this along
 #: some axis only touch (shared fold edges, tab bases, vertices).
 NET_OVERLAP_MM = 1e-6
+
+#: Probabilities summing to 1 within this are a distribution.
+PROBABILITY_SUM = 1e-6

@@ -401,10 +401,13 @@ class World:
         once its orientation lies in f's basin (:class:`RestBasins`) and its
         kinetic energy plus its potential energy above rest on f is below
         ``settings.energy_fraction`` of f's basin barrier (it can never leave
-        the basin, whose only resting place is f); it has settled once it has been
-        still for ``settings.settle_time`` (then it lies on the face within
-        ``face_tolerance`` of straight down, or is cocked); it is unsettled at
-        ``settings.time_limit``.  `early` False turns off the free-fall
+        the basin, whose only resting place is f), or once it has been still
+        for ``settings.cocked_time`` on a face it can rest on, within
+        ``face_tolerance`` of straight down; still that long on no such
+        face, it is cocked; it is unsettled at ``settings.time_limit``.
+        Without the energy rule (`early` False or ``energy_fraction`` 0) a
+        die still for ``settings.settle_time`` on a face it can rest on has
+        landed.  `early` False turns off the free-fall
         shortcut and the energy rule (the die then runs until still).
         """
         s, body = self.settings, self.body
@@ -413,7 +416,7 @@ class World:
             states, skipped = fly(states, body, s)
         else:
             skipped = np.zeros(n, dtype=np.int64)
-        outcomes = np.full(n, UNSETTLED, dtype=np.int8)
+        outcomes = np.full(n, UNSETTLED, dtype=np.int32)
         slots = len(self.dice)
         current = np.full(slots, -1)  # drop index in each slot
         steps = np.zeros(slots, dtype=np.int64)
@@ -482,7 +485,11 @@ class World:
                 trapped = energy - mg * rest[basin] < limit[basin]
             # still on a face it cannot rest on, a die is toppling (or, if it stays, cocked)
             down = (cos[np.arange(len(live)), face] >= cos_tol) & resting[face]
-            landed = trapped | (down & (still_near >= settle_steps))
+            # the landing rule: a die has landed once it can no longer leave its face (in the face's basin,
+            # below its barrier); a short still window is not enough (a die toppling slowly off a face is
+            # still for a while), so without the energy rule a die must be still for settle_time and with it
+            # (engine errors can hide a tiny barrier) for cocked_time
+            landed = trapped | (down & (still_near >= (settle_steps if basins is None else cocked_steps)))
             cocked = ~down & (still_near >= cocked_steps)
             timeout = steps[live] >= max_steps
             for j in np.flatnonzero(landed | cocked | timeout):
@@ -509,7 +516,7 @@ class World:
         """
         p, cid, die = self.p, self.cid, self.dice[0]
         s = self.settings
-        outcomes = np.full(len(states), UNSETTLED, dtype=np.int8)
+        outcomes = np.full(len(states), UNSETTLED, dtype=np.int32)
         for i, state in enumerate(states):
             self.place(0, state)
             t = still = 0.0

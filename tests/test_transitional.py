@@ -10,8 +10,8 @@ import pytest
 from diefab.design import Design, design_to_toml, parse_design
 from diefab.errors import DesignError
 from diefab.families import gem_polyhedron
-from diefab.geometry import RestBasins, resting_faces, solid_angles
-from diefab.models import MODELS, face_probabilities, value_probabilities
+from diefab.geometry import Polyhedron, RestBasins, resting_faces, solid_angles
+from diefab.models import MODELS, basin_shares, face_probabilities, value_probabilities
 
 #: A gem too flat for its girdle faces f1-f4: the die rolls off them onto f5-f9.
 TIPPY = gem_polyhedron({"a": 1.0, "b": 0.5, "c": 0.2, "d": 0.3})
@@ -98,3 +98,68 @@ def test_predict_reports_transitional_faces(run, tmp_path):
     assert faces["f1"]["probability"] == 0 and sum(data["values"].values()) == pytest.approx(1)
     code, out, _ = run("predict", path)
     assert code == 0 and "4 transitional faces" in out
+
+
+# ----------------------------------------------------------------------
+# the basins model
+
+
+def test_basins_model_of_a_cube_is_uniform_and_off_centre_matches_monte_carlo():
+    cube = Polyhedron.from_points([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+    p, bound = RestBasins.of(cube, np.zeros(3)).shares()
+    assert bound < 2e-3 and np.allclose(p, 1 / 6, atol=bound)
+    center = np.array([0.1, 0.2, -0.3])
+    basins = RestBasins.of(cube, center)
+    p, bound = basins.shares()
+    d = np.random.default_rng(5).normal(size=(200_000, 3))
+    mc = np.bincount(basins.face_of(d / np.linalg.norm(d, axis=1)[:, None]), minlength=6) / len(d)
+    assert np.abs(p - mc).max() < 4 * np.sqrt(0.25 / len(d)) + bound
+    assert p.sum() == pytest.approx(1)
+
+
+def test_basins_model_gives_transitional_faces_nothing_and_sums_to_one():
+    p, bound = basin_shares(TIPPY, TIPPY.centroid)
+    assert np.all(p[~resting_faces(TIPPY, TIPPY.centroid)] == 0) and p.sum() == pytest.approx(1) and bound < 1e-2
+
+
+def test_predict_basins_states_its_accuracy(run):
+    code, out, err = run("predict", "fudge-gem", "--model", "basins", "--json")
+    assert code == 0, err
+    data = json.loads(out)
+    assert 0 <= data["error_bound"] < 1e-2 and sum(data["values"].values()) == pytest.approx(1)
+
+
+# ----------------------------------------------------------------------
+# many faces
+
+
+def _rounded_cube(count: int = 16) -> Design:
+    """A cube with rounded edges and corners: 6 faces it rests on and hundreds of transitional ones."""
+    import itertools
+
+    import trimesh
+
+    sphere = trimesh.creation.uv_sphere(radius=0.25, count=[count, count]).vertices
+    corners = np.array(list(itertools.product((-0.75, 0.75), repeat=3)))
+    poly = Polyhedron.from_points((corners[:, None, :] + sphere[None]).reshape(-1, 3), strict=False)
+    resting = resting_faces(poly, poly.centroid)
+    values = {}
+    for k in np.flatnonzero(resting):
+        n = poly.normals[k]
+        axis = int(np.argmax(np.abs(n)))
+        values[poly.names[k]] = 1 + axis + (3 if n[axis] < 0 else 0)
+    vertices = tuple(map(tuple, poly.vertices.tolist()))
+    faces = tuple(tuple(map(int, f)) for f in poly.faces)
+    return Design("rounded", "convex", vertices=vertices, faces=faces, values=values, target="uniform:6")
+
+
+def test_a_die_with_hundreds_of_faces_predicts_and_rolls():
+    from diefab.physics import simulate
+
+    d = _rounded_cube()
+    assert len(d.polyhedron.faces) >= 500 and len(d.values) == 6
+    for model in MODELS:
+        assert np.allclose(value_probabilities(d, model), 1 / 6, atol=0.03)
+    result = simulate(d, 48, seed=0, workers=1)
+    assert result.outcomes.dtype.itemsize >= 4 and result.landed + result.cocked + result.unsettled == 48
+    assert result.value_counts(d).sum() == result.landed > 40

@@ -1,9 +1,11 @@
 """The ``diefab`` command line: parse, call the library, write files, print.
 
 One module per command or group of commands; shared options live in
-:mod:`diefab.cli.common`.  Every error a user can cause ends in one line on
-stderr and exit status 2; Ctrl-C ends with status 130.  Outputs are written
-atomically.
+:mod:`diefab.cli.common`.  Every error a user can cause ends in one line,
+``diefab: error: ...``, on stderr and exit status 2; a bug ends in one line and
+status 1.  Ctrl-C, SIGTERM and SIGHUP end a command cleanly with status 130.
+Outputs are written atomically, as one transaction per command, never over an
+input (:mod:`diefab.files`).
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ import sys
 import click
 
 from ..errors import DiefabError
+from .design import design
 from .net import net
 from .optimize import optimize
 from .predict import predict, templates
@@ -30,55 +33,98 @@ def cli() -> None:
     """Design, simulate and fabricate dice with unequal face probabilities."""
 
 
-for _command in (templates, predict, stats, optimize, validate, net, stl):
+for _command in (templates, predict, stats, design, optimize, validate, net, stl):
     cli.add_command(_command)
 
 
+#: Longest error line printed (a 5-million-digit token stays out of the terminal).
+MESSAGE_MAX = 1000
+
+
 def _terminate(signum, frame) -> None:
-    raise KeyboardInterrupt  # a kill (SIGTERM) stops a run as cleanly as Ctrl-C
+    raise KeyboardInterrupt  # a kill (SIGTERM) or hang-up (SIGHUP) stops a run as cleanly as Ctrl-C
 
 
 def main(argv: list[str] | None = None) -> None:
     """Console entry point: one-line errors, exit status 2 on bad input."""
     import signal
     import threading
+    import warnings
 
-    previous = signal.getsignal(signal.SIGTERM)
-    catch = previous is signal.SIG_DFL and threading.current_thread() is threading.main_thread()
-    if catch:
-        signal.signal(signal.SIGTERM, _terminate)
+    caught = {}
+    if threading.current_thread() is threading.main_thread():
+        for name in ("SIGTERM", "SIGHUP"):
+            signum = getattr(signal, name, None)
+            if signum is not None and signal.getsignal(signum) is signal.SIG_DFL:
+                caught[signum] = signal.signal(signum, _terminate)
     try:
-        _main(argv)
+        with warnings.catch_warnings():
+            shown: set[str] = set()
+
+            def show(message, category, filename, lineno, file=None, line=None) -> None:
+                """A Python warning as one ``diefab: warning:`` line, each text once."""
+                text = _one_line(str(message))
+                if text not in shown:
+                    shown.add(text)
+                    click.echo(f"diefab: warning: {text}", err=True)
+
+            warnings.showwarning = show
+            _main(argv)
     finally:
-        if catch:
-            signal.signal(signal.SIGTERM, previous)
+        for signum, previous in caught.items():
+            signal.signal(signum, previous)
+
+
+def _one_line(text: str) -> str:
+    text = " ".join(text.split())
+    return text if len(text) <= MESSAGE_MAX else text[: MESSAGE_MAX - 3] + "..."
+
+
+def error(message: str, status: int = 2):
+    """Print ``diefab: error: MESSAGE`` (one line) on stderr and exit with `status`."""
+    click.echo(f"diefab: error: {_one_line(message)}", err=True)
+    sys.exit(status)
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so that the interpreter's last flush cannot fail again."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):
+        pass
 
 
 def _main(argv: list[str] | None) -> None:
     try:
         rv = cli.main(args=argv, prog_name="diefab", standalone_mode=False)
-    except click.exceptions.Abort:
+        sys.stdout.flush()
+    except BrokenPipeError:  # the reader went away (``diefab templates | head -1``): stop quietly, as click does
+        _silence_stdout()
+        sys.exit(1)
+    except (click.exceptions.Abort, KeyboardInterrupt):
         click.echo("diefab: interrupted", err=True)
         sys.exit(130)
-    except KeyboardInterrupt:
-        click.echo("diefab: interrupted", err=True)
-        sys.exit(130)
+    except click.exceptions.Exit as exc:
+        sys.exit(exc.exit_code)
     except click.ClickException as exc:
         ctx = getattr(exc, "ctx", None)
-        where = f"{ctx.command_path}: " if ctx is not None else "diefab: "
-        click.echo(f"{where}error: {exc.format_message()}".replace("\n", " "), err=True)
-        sys.exit(2)
+        command = ctx.command_path.removeprefix("diefab").strip() if ctx is not None else ""
+        where = f"{command}: " if command else ""
+        error(f"{where}{exc.format_message()}")
     except DiefabError as exc:
-        click.echo(f"diefab: error: {exc}".replace("\n", " "), err=True)
-        sys.exit(2)
+        error(str(exc))
+    except OSError as exc:  # the system refused (a full disk under stdout, an I/O error), not a bug
+        try:
+            sys.stdout.flush()
+        except OSError:  # stdout itself failed: its last flush at exit must not fail again
+            _silence_stdout()
+        where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
+        error(f"{exc.strerror or exc}{where}")
+    except RecursionError as exc:  # a pathological input nested too deep for the parser
+        error(f"input nested too deeply to read ({exc})")
     except Exception as exc:  # a bug, not bad input: one line unless asked for the traceback
         if os.environ.get("DIEFAB_DEBUG"):
             raise
-        click.echo(
-            f"diefab: internal error: {type(exc).__name__}: {exc} (set DIEFAB_DEBUG=1 for a traceback)".replace(
-                "\n", " "
-            ),
-            err=True,
-        )
-        sys.exit(1)
+        error(f"internal error: {type(exc).__name__}: {exc} (set DIEFAB_DEBUG=1 for a traceback)", status=1)
     sys.exit(rv if isinstance(rv, int) else 0)

@@ -37,7 +37,7 @@ def note_fast_fill(d: Design, model: str, fill: str) -> None:
     """One line on stderr when the fast model's gem correction would be extrapolated to another fill."""
     if model == "fast" and d.family == "gem" and fill != "solid":
         click.echo(
-            f"note: the fast model's gem correction was learned on solid gems; with a {fill} fill it is an "
+            f"diefab: note: the fast model's gem correction was learned on solid gems; with a {fill} fill it is an "
             "extrapolation (README: the fast model), so check the die with diefab validate",
             err=True,
         )
@@ -79,6 +79,39 @@ def get_design(spec: str, params: tuple[str, ...] = (), target: str | None = Non
     return design
 
 
+def design_inputs(spec: str, design: Design) -> list[Path]:
+    """The files DESIGN was read from (design file or template, mesh, SVG symbols): no output may replace them."""
+    from ..design import template_path
+    from ..errors import DiefabError
+
+    files = []
+    if Path(spec).is_file():
+        files.append(Path(spec))
+    else:
+        try:
+            files.append(Path(str(template_path(spec))))
+        except DiefabError:
+            pass
+    if design.mesh is not None:
+        files.append(Path(design.mesh))
+    files += [Path(text[4:].strip()) for text in design.labels.values() if text.startswith("svg:")]  # symbols
+    return files
+
+
+def refuse_options(ctx: click.Context, names: list[str], why: str) -> None:
+    """Raise a usage error if any of the named parameters was given on the command line."""
+    for name in names:
+        source = ctx.get_parameter_source(name)
+        if source is not None and source.name in ("COMMANDLINE", "ENVIRONMENT"):
+            param = next(p for p in ctx.command.params if p.name == name)
+            raise click.UsageError(f"{param.opts[0]} {why}", ctx=ctx)
+
+
+def seed_option(help_text: str):
+    """``--seed``: a non-negative integer (NumPy seeds cannot be negative)."""
+    return click.option("--seed", type=click.IntRange(0, 2**63 - 1), default=0, show_default=True, help=help_text)
+
+
 def free_parameters(design: Design, free: str | None) -> list[str] | None:
     """``--free a,b,c`` -> the named parameters of the design's family (None when not given)."""
     if free is None:
@@ -86,7 +119,7 @@ def free_parameters(design: Design, free: str | None) -> list[str] | None:
     from ..families import family
 
     names = [n.strip() for n in free.split(",") if n.strip()]
-    known = [p.name for p in family(design.family).parameters]
+    known = [p.name for p in family(design.family).parameters if not p.integer]
     bad = [n for n in names if n not in known]
     if bad or not names:
         raise click.BadParameter(
@@ -239,8 +272,11 @@ def paper_balance(design: Design, net, spec: str, **card):
     base = design if design.fill.kind == "paper" else apply_fill(design, "paper")
     fill = apply_fill(base, None, **card).fill
     props = mass_properties(net.poly, fill, mm_per_unit=net.mm_per_unit, tabs=net_tab_shapes(net))
+    center = props.center
+    if design.center_of_mass is not None:  # a stated centre of mass overrides the card's
+        center = design.mass_properties(fill).center
     words = f"{fill.card_g_m2:g} g/m² card with {len(net.tabs)} glue tabs"
-    return made_balance(design, props.center, "paper", words, spec)
+    return made_balance(design, center, "paper", words, spec)
 
 
 def print_balance(design: Design, solid, fill, spec: str):

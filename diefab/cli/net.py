@@ -2,12 +2,18 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import click
 
-from ..errors import DiefabError
-from .common import design_argument, emit_json, fill_options, get_design, json_option, out_option, paper_balance
+from .common import (
+    design_argument,
+    design_inputs,
+    emit_json,
+    fill_options,
+    get_design,
+    json_option,
+    out_option,
+    paper_balance,
+)
 
 SIZE_HELP = (
     "Die size in mm, as dice makers measure it: face to face for dice whose faces come in parallel pairs "
@@ -43,24 +49,20 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
     from ..fabricate.labels import reading_note, small_die_warning
     from ..fabricate.net import design_net, parse_formats, render_net
     from ..fabricate.unfold import parse_page
-    from ..files import atomic_write, ensure_dir
+    from ..files import check_outputs, ensure_dir, output_path, write_files
 
     kinds = parse_formats(formats)
     sheet = parse_page(page)
     d = get_design(design, params)
     size = d.size_mm if size_mm is None else size_mm
     ensure_dir(out_dir)
+    paths = {kind: output_path(out_dir, d.name, f"-net.{kind}") for kind in kinds}
+    inputs = design_inputs(design, d)
+    check_outputs(paths.values(), inputs)
     the_net = design_net(d, size_mm=size_mm, page=sheet, tab_width=tab_width)
     rendered = render_net(d, the_net, kinds, face_names=face_names, copies=copies, mark=mark, pips=pips)
     warning = small_die_warning(d, size)
-    written: list[Path] = []
-    try:
-        for kind in kinds:
-            written.append(atomic_write(out_dir / f"{d.name}-net.{kind}", rendered[kind]))
-    except DiefabError:
-        for path in written:
-            path.unlink(missing_ok=True)
-        raise
+    written = write_files({paths[k]: rendered[k] for k in kinds}, inputs=inputs)
     if warning:
         click.echo(f"diefab: warning: {warning}", err=True)
     balance = paper_balance(d, the_net, design, **card)

@@ -3,17 +3,19 @@
 from __future__ import annotations
 
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import click
 import numpy as np
 
 from ..design import format_value
-from ..files import atomic_write, ensure_dir
+from ..files import atomic_write, check_outputs, ensure_dir, output_path, safe_name
 from .common import (
     apply_fill,
     console,
     design_argument,
+    design_inputs,
     emit_json,
     fill_options,
     free_parameters,
@@ -22,6 +24,8 @@ from .common import (
     note_fast_fill,
     out_option,
     pop_fill,
+    refuse_options,
+    seed_option,
     simulation_options,
     values_dict,
 )
@@ -33,10 +37,10 @@ from .common import (
     "--model",
     default="solid-angle",
     show_default=True,
-    help="Landing model to fit: solid-angle, fast, or simulation (pybullet drops).",
+    help="Landing model to fit: solid-angle, basins (quasi-static), fast, or simulation (pybullet drops).",
 )
 @click.option("--target", default=None, help="Target distribution (default: the design's).")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the random starts.")
+@seed_option("Seed of the random starts (and, with --model simulation, of the drops).")
 @click.option(
     "--min-margin",
     type=float,
@@ -73,19 +77,25 @@ def optimize(ctx, design, params, model, target, seed, min_margin, starts, free,
     if model == "simulation":
         return optimize_simulation(ctx, design, params, target, seed, min_margin, starts, free, objective, name,
                                    out_dir, as_json, fill=fill, **sim)  # fmt: skip
+    refuse_options(ctx, list(sim), "applies only to --model simulation")
     d = apply_fill(get_design(design, params, target), **fill)
     if not np.isfinite(min_margin) or min_margin < 0:
         raise click.BadParameter(f"{min_margin} must be a non-negative number", param_hint="--min-margin")
     names = free_parameters(d, free)
     ensure_dir(out_dir)
+    name = name or f"{d.name}-{model}-opt"
+    inputs = design_inputs(design, d)
+    path = output_path(out_dir, name, ".toml")
+    check_outputs([path], inputs)
     note_fast_fill(d, model, d.fill.kind)
     result = optimize_design(
         d, model=model, objective=objective, names=names, min_margin=min_margin, starts=starts, seed=seed, name=name
     )
     best = result.design
-    path = atomic_write(
-        out_dir / f"{best.name}.toml",
+    atomic_write(
+        path,
         design_to_toml(best, comment=f"Written by: diefab optimize {design} --model {model} --seed {seed}"),
+        inputs=inputs,
     )
     goal = best.target_distribution.aligned(best.support)
     margins = result.margins
@@ -98,8 +108,8 @@ def optimize(ctx, design, params, model, target, seed, min_margin, starts, free,
         "values": values_dict(best, result.values),
         "target_values": values_dict(best, goal),
         "margins": dict(zip(best.polyhedron.names, margins.tolist())),
-        "min_margin": float(margins.min()),
-        "min_margin_mm": float(margins.min() * best.mm_per_unit),
+        "min_margin": result.min_margin,
+        "min_margin_mm": result.min_margin * best.mm_per_unit,
         "binding_face": result.binding_face,
         "evaluations": result.evaluations,
         "starts": result.starts,
@@ -124,7 +134,7 @@ def optimize(ctx, design, params, model, target, seed, min_margin, starts, free,
         + " ".join(f"{81 * q:6.2f}" for q in goal)
     )
     con.print(
-        f"smallest stability margin {margins.min():.4f} ({margins.min() * best.mm_per_unit:.2f} mm at "
+        f"smallest stability margin {result.min_margin:.4f} ({result.min_margin * best.mm_per_unit:.2f} mm at "
         f"{best.size_mm:g} mm) on face {result.binding_face}; required {min_margin:g}"
     )
     con.print(f"wrote {path}")
@@ -191,16 +201,22 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         raise click.BadParameter(f"{max_sims_per_eval} must be >= --sims-per-eval", param_hint="--max-sims-per-eval")
     if max_evals is not None and max_evals <= 0:
         raise click.BadParameter(f"{max_evals} must be > 0", param_hint="--max-evals")
-    if workers is not None and workers <= 0:
-        raise click.BadParameter(f"{workers} must be > 0", param_hint="--workers")
+    if workers is not None and not 1 <= workers <= 1024:
+        raise click.BadParameter(f"{workers} must be in [1, 1024]", param_hint="--workers")
+    if scheduler is not None:
+        refuse_options(ctx, ["workers"], "does not apply with --scheduler (the cluster's workers run the drops)")
     if objective not in ("eq2", "tvd"):
         raise click.BadParameter(f"{objective!r}: a simulation run minimizes eq2 or tvd", param_hint="--objective")
     if not np.isfinite(min_margin) or min_margin < 0:
         raise click.BadParameter(f"{min_margin} must be a non-negative number", param_hint="--min-margin")
     d = apply_fill(get_design(design, params, target), **(fill or {}))
     d.check_stable(0.0)
+    inputs = design_inputs(design, d)
     warning = None
+    budget_given = ctx.get_parameter_source("budget").name == "COMMANDLINE"
     if resume is not None:
+        refuse_options(ctx, ["name", "starts", "params"],
+                       "does not apply with --resume (the run's design and start are in its run.json)")  # fmt: skip
         log = RunLog(resume)
         spec = log.spec()
         stored = spec.design
@@ -208,21 +224,39 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
                                                                                  d.target):  # fmt: skip
             raise RunError(f"run {resume} optimizes design {stored.name!r} for {stored.target}, not {d.name!r} "
                            f"for {d.target}")  # fmt: skip
-        given = {"seed": seed, "sims_per_eval": sims_per_eval, "objective": objective, "min_margin": min_margin,
-                 "method": method}  # fmt: skip
-        for key, value in given.items():
+        given = {  # option -> (value given, value stored)
+            "seed": (seed, spec.seed), "sims_per_eval": (sims_per_eval, spec.sims_per_eval),
+            "objective": (objective, spec.objective), "min_margin": (min_margin, spec.min_margin),
+            "method": (method, spec.method), "start_model": (start_model, spec.start), "sigma": (sigma, spec.sigma0),
+            "max_sims_per_eval": (max_sims_per_eval, spec.max_sims),
+            "free": (",".join(free_parameters(d, free) or ()), ",".join(spec.names)),
+        }  # fmt: skip
+        for key, (value, kept) in given.items():
             source = ctx.get_parameter_source(key)
-            if source is not None and source.name == "COMMANDLINE" and value != getattr(spec, key):
-                raise RunError(f"--{key.replace('_', '-')} {value} differs from the run's {getattr(spec, key)} "
-                               f"(stored in {log.spec_path})")  # fmt: skip
+            if source is not None and source.name == "COMMANDLINE" and value != kept:
+                flag = next(p.opts[0] for p in ctx.command.params if p.name == key)
+                raise RunError(f"{flag} {value} differs from the run's {kept} (stored in {log.spec_path})")
         history, warning = log.read()
-        run_name = Path(resume).name
+        run_name = safe_name(Path(resume).resolve().name)
+        best_path = output_path(log.folder, run_name, ".toml")
+        check_outputs([best_path], inputs)
+        changed = {}
+        if budget_given or spec.budget_minutes is None:
+            changed["budget_minutes"] = float(budget)
+        if max_evals is not None:
+            changed["max_evaluations"] = max_evals
+        if changed:
+            spec = replace(spec, **changed)
+            log.update(spec)
+        fresh = False
     else:
-        names = free_parameters(d, free) or [p.name for p in family(d.family).parameters]
+        names = free_parameters(d, free) or family(d.family).free_names(d.params)
         run_name = name or f"{d.name}-simulation-opt"
-        log = RunLog(out_dir / run_name)
-        if log.path.exists():
+        log = RunLog(output_path(out_dir, run_name, ""))
+        if log.holds_run():
             raise RunError(f"{log.folder} already holds a run: resume it with --resume {log.folder} or pick --name")
+        best_path = output_path(log.folder, run_name, ".toml")
+        check_outputs([log.spec_path, log.path, best_path], inputs)
         physics = PhysicsSettings.from_mapping(d.physics)
         x0 = start_point(d, names, model=start_model, objective=objective, min_margin=min_margin, starts=starts,
                          seed=seed)  # fmt: skip
@@ -230,24 +264,27 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
             design_toml=design_to_toml(d), names=tuple(names), x0=tuple(float(v) for v in x0), objective=objective,
             min_margin=float(min_margin), seed=seed, sims_per_eval=sims_per_eval,
             max_sims=max_sims_per_eval or 16 * sims_per_eval, method=method, sigma0=sigma,
-            physics=physics.as_dict(), start=start_model,
+            physics=physics.as_dict(), start=start_model, budget_minutes=float(budget), max_evaluations=max_evals,
         )  # fmt: skip
-        log.create(spec)
         history = []
-    if warning:
-        click.echo(f"diefab: warning: {warning}", err=True)
+        fresh = True
+    budget = spec.budget_minutes
+    max_evals = spec.max_evaluations
     client = None
-    if scheduler is not None:
+    if scheduler is not None:  # before the run folder exists: a wrong address leaves nothing behind
         from ..physics import dask_client
 
         client, _ = dask_client(scheduler)
-    best_path = log.folder / f"{run_name}.toml"
+    if fresh:
+        log.create(spec)
+    if warning:
+        click.echo(f"diefab: warning: {warning}", err=True)
     command = f"diefab optimize {design} --model simulation --seed {spec.seed} (run {log.folder})"
     live, update = _simulation_view(spec, budget * 60, history)
 
     def on_best(record):
         best = best_design(spec, record, run_name)
-        atomic_write(best_path, design_to_toml(best, comment=f"Written by: {command}"))
+        atomic_write(best_path, design_to_toml(best, comment=f"Written by: {command}"), inputs=inputs)
         if update:
             update(best=record)
 
@@ -272,8 +309,13 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
             live.stop()
         log.close()
         click.echo(f"diefab: interrupted; resume with: diefab optimize {design} --model simulation --resume "
-                   f"{log.folder}", err=True)  # fmt: skip
+                   f"{log.folder} (the run keeps its budget of {budget:g} minutes in all; --budget changes it)",
+                   err=True)  # fmt: skip
         sys.exit(130)
+    except BaseException:
+        if fresh:  # a run that failed before its first evaluation leaves no folder to block the corrected rerun
+            log.discard(best_path)
+        raise
     finally:
         if live:
             live.stop()

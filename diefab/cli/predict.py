@@ -37,7 +37,8 @@ def templates(as_json: bool) -> None:
 
 @click.command()
 @design_argument
-@click.option("--model", default="solid-angle", show_default=True, help="Landing model.")
+@click.option("--model", default="solid-angle", show_default=True,
+              help="Landing model: solid-angle, basins (quasi-static) or fast.")  # fmt: skip
 @fill_options("paper", "print")
 @click.option("--target", default=None, help="Override the design's target distribution.")
 @json_option
@@ -52,7 +53,13 @@ def predict(design: str, params, model: str, target: str | None, as_json: bool, 
     d.check_stable(0.0, fill_model)
     note_fast_fill(d, model, fill_model.kind)
     poly = d.polyhedron
-    faces = face_probabilities(d, model, fill_model)
+    bound = None
+    if model == "basins":
+        from ..models import basin_shares
+
+        faces, bound = basin_shares(poly, d.mass_properties(fill_model).center)
+    else:
+        faces = face_probabilities(d, model, fill_model)
     values = to_values(d, faces)
     goal = d.target_distribution.aligned(d.support)
     com = d.mass_properties(fill_model).center
@@ -89,6 +96,7 @@ def predict(design: str, params, model: str, target: str | None, as_json: bool, 
         "center_of_mass": com.tolist(),
         "margins": {n: float(m) for n, m in zip(poly.names, margins)},
         "min_margin": float(margins[d.resting_mask()].min()),
+        **({} if bound is None else {"error_bound": bound}),
         "objective": pearson_divergence(values, goal),
         "tvd": tvd(values, goal),
         "jsd": jsd(goal, values),
@@ -124,3 +132,5 @@ def predict(design: str, params, model: str, target: str | None, as_json: bool, 
         table.add_row(format_value(v, min(d.support) < 0), f"{p:.4f}", f"{q:.4f}", f"{p - q:+.4f}")
     con.print(table)
     con.print(f"Eq. (2) objective {result['objective']:.5f}   TVD {result['tvd']:.4f}   JSD {result['jsd']:.5f}")
+    if bound is not None:
+        con.print(f"basins integrated to within {bound:.1e} (share of orientations on unresolved basin rims)")

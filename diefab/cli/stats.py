@@ -7,7 +7,7 @@ from pathlib import Path
 import click
 
 from ..design import format_value
-from .common import console, emit_json, json_option
+from .common import console, emit_json, json_option, seed_option
 
 
 @click.command()
@@ -20,7 +20,7 @@ from .common import console, emit_json, json_option
 )
 @click.option("--target", required=True, help="Target distribution, e.g. 4df or 1,4,10,16,19,16,10,4,1.")
 @click.option("--alpha", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.05, show_default=True)
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the Monte-Carlo p-value.")
+@seed_option("Seed of the Monte-Carlo p-value.")
 @json_option
 def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, seed: int, as_json: bool) -> None:
     """Test rolls against a target: chi2, G, TVD, JSD, intervals, power."""

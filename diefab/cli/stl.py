@@ -7,10 +7,11 @@ from pathlib import Path
 import click
 
 from ..errors import DiefabError
-from ..files import atomic_write, ensure_dir
+from ..files import check_outputs, ensure_dir, output_path, write_files
 from .common import (
     apply_fill,
     design_argument,
+    design_inputs,
     emit_json,
     fill_options,
     get_design,
@@ -89,19 +90,26 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face
     except DiefabError as exc:
         raise FabricationError(str(exc)) from exc
     ensure_dir(out_dir)
+    inputs = [*design_inputs(design, d), *([font_file] if font_file else [])]
+    names = {k: output_path(out_dir, d.name, f".{k}") for k in dict.fromkeys(kinds)}
+    if preview:
+        names["preview"] = output_path(out_dir, d.name, "-preview.png")
+    if inlay:
+        names["inlay"] = output_path(out_dir, d.name, "-inlay.stl")
+    check_outputs(names.values(), inputs)
     solid = build_solid(
         d, size_mm=size_mm, depth_mm=depth_mm, font=font_file, round_mm=round_mm, emboss=emboss,
         min_stroke_mm=min_stroke, min_text_height_mm=min_text_height, margin_mm=margin_mm,
         density_g_cm3=density, print_fill=fill, uniform_height=not fit_each, bed=bed_face, mark=mark, pips=pips,
     )  # fmt: skip
-    payloads = {f"{d.name}.{k}": (stl_bytes if k == "stl" else threemf_bytes)(solid) for k in dict.fromkeys(kinds)}
+    payloads = {names[k]: (stl_bytes if k == "stl" else threemf_bytes)(solid) for k in dict.fromkeys(kinds)}
     if inlay:
-        payloads[f"{d.name}-inlay.stl"] = inlay_stl_bytes(solid)
+        payloads[names["inlay"]] = inlay_stl_bytes(solid)
     if preview:
         from ..fabricate.preview import render_preview
 
-        payloads[f"{d.name}-preview.png"] = render_preview(solid)
-    written = [str(atomic_write(out_dir / name, data)) for name, data in payloads.items()]
+        payloads[names["preview"]] = render_preview(solid)
+    written = [str(p) for p in write_files(payloads, inputs=inputs)]
     for line in solid.warnings:
         click.echo(f"diefab: warning: {line}", err=True)
     balance = print_balance(d, solid, fill, design)

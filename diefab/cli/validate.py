@@ -6,12 +6,14 @@ import sys
 from pathlib import Path
 
 import click
+import numpy as np
 
 from ..design import format_value
 from .common import (
     apply_fill,
     console,
     design_argument,
+    design_inputs,
     emit_json,
     fill_options,
     get_design,
@@ -19,6 +21,8 @@ from .common import (
     json_option,
     physics_options,
     pop_fill,
+    refuse_options,
+    seed_option,
     values_dict,
 )
 
@@ -26,7 +30,7 @@ from .common import (
 @click.command()
 @design_argument
 @click.option("--sims", type=int, default=10_000, show_default=True, help="Number of simulated drops.")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed: the same seed gives the same counts.")
+@seed_option("Seed: the same seed gives the same counts.")
 @click.option("--workers", type=int, default=None, help="Worker processes (default: all cores).")
 @click.option("--scheduler", default=None, metavar="ADDRESS", help="Run on this Dask scheduler (tcp://host:8786).")
 @click.option("--plot", "plot_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
@@ -35,23 +39,27 @@ from .common import (
 @click.option("--target", default=None, help="Override the design's target distribution.")
 @physics_options
 @json_option
-def validate(design, params, sims, seed, workers, scheduler, plot_file, target, as_json, **physics) -> None:
+@click.pass_context
+def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, target, as_json, **physics) -> None:
     """Drop DESIGN many times in pybullet and test the counts against its target."""
     import os
 
     from ..errors import PhysicsError
-    from ..files import atomic_write, ensure_dir
+    from ..files import atomic_write, check_outputs, ensure_dir
     from ..models import value_probabilities
     from ..physics import PhysicsSettings, SimulationInterrupted, plot_validation, simulate
     from ..stats import goodness_of_fit
 
     fill = pop_fill(physics)
+    if scheduler is not None:
+        refuse_options(ctx, ["workers"], "does not apply with --scheduler (the cluster's workers run the drops)")
     d = apply_fill(get_design(design, params, target), **fill)
     settings = PhysicsSettings.from_mapping(d.physics, **physics)
     if plot_file is not None:
         if plot_file.suffix.lower() not in (".png", ".svg"):
             raise click.BadParameter(f"{plot_file} must end in .png or .svg", param_hint="--plot")
         ensure_dir(plot_file.parent)
+        check_outputs([plot_file], design_inputs(design, d))
     bar = None
     if sys.stderr.isatty():
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
@@ -76,6 +84,8 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, target, 
     fit = goodness_of_fit(counts, goal, seed=seed)
     model = value_probabilities(d, "solid-angle")
     keys = [str(v) for v in d.support]
+    # values the target never rolls, rolled: counted and reported (they reject the target outright)
+    unexpected = {k: int(c) for k, c, g in zip(keys, counts, goal) if g == 0 and c > 0}
     out = {
         "design": d.name,
         "params": dict(d.params),
@@ -91,7 +101,9 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, target, 
         "solid_angle": values_dict(d, model),
         "cocked": result.cocked,
         "unsettled": result.unsettled,
-        "chi2": fit.chi2,
+        "zero_weight_rolls": unexpected,
+        "transitional": list(d.transitional_faces),
+        "chi2": fit.chi2 if np.isfinite(fit.chi2) else None,
         "df": fit.df,
         "p_value": fit.p_value,
         "p_value_mc": fit.p_value_mc,
@@ -106,7 +118,8 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, target, 
         "settings": settings.as_dict(),
     }
     if plot_file is not None:
-        atomic_write(plot_file, plot_validation(d, result, fmt=plot_file.suffix.lower()[1:]))
+        atomic_write(plot_file, plot_validation(d, result, fmt=plot_file.suffix.lower()[1:]),
+                     inputs=design_inputs(design, d))  # fmt: skip
     if as_json:
         emit_json(out)
         return
@@ -121,11 +134,16 @@ def validate(design, params, sims, seed, workers, scheduler, plot_file, target, 
         table.add_row(format_value(v, signed), str(counts[k]), f"{fit.observed[k]:.4f}", f"[{lo:.4f}, {hi:.4f}]",
                       f"{goal[k]:.4f}", f"{model[k]:.4f}")  # fmt: skip
     con.print(table)
-    con.print("faces: " + "  ".join(f"{n}={c}" for n, c in zip(result.faces, result.face_counts)))
+    shown = [f"{n}={c}" for n, c in zip(result.faces, result.face_counts) if n in d.values]
+    more = f"  ... ({len(shown) - 40} more; --json lists all)" if len(shown) > 40 else ""
+    con.print("faces: " + "  ".join(shown[:40]) + more)
     con.print(
         f"{result.n} drops: {result.landed} on a face, {result.cocked} cocked, {result.unsettled} unsettled; "
         f"{result.seconds:.1f} s, {result.drops_per_second:,.0f} drops/s"
     )
+    if unexpected:
+        con.print("rolled values with target weight 0: " + "  ".join(f"{k} x{c}" for k, c in unexpected.items())
+                  + " (impossible under the target: p = 0)")  # fmt: skip
     con.print(f"chi2 = {fit.chi2:.3f} (df {fit.df}), p = {fit.p_value:.4g} (Monte-Carlo {fit.p_value_mc:.4g})")
     con.print(f"TVD = {fit.tvd:.4f} (expected under the target {fit.expected_tvd:.4f})   "
               f"JSD = {fit.jsd:.5f} (expected {fit.expected_jsd:.5f})")  # fmt: skip

@@ -58,7 +58,7 @@ import numpy as np
 from .. import tolerances as tol
 from ..design import Design
 from ..errors import FabricationError
-from ..geometry import Polyhedron, solid_angles
+from ..geometry import Polyhedron
 from ..mass import Fill, inset
 from .labels import design_axis, face_frame, fit_label, label_shape, small_die_warning
 from .text import Font, load_font, stroke_width, thin_fraction
@@ -683,6 +683,9 @@ def build_solid(
 
     # --- mass and balance
     com_sharp = poly.centroid * scale
+    # the real body's centre of mass (a stated one, a non-convex mesh's) is off the hull's by `body_offset`;
+    # rounding, engraving and infill move it as they move the hull's
+    body_offset = design.mass_properties(Fill("solid")).center * scale - com_sharp
     com_uncut = uncut_first / uncut_volume
     com_solid = first / volume
     if round_mm == 0:  # walls, top and bottom skins and infill as the slicer lays them, labels included
@@ -723,12 +726,14 @@ def build_solid(
             f"depth {depth_mm:g} mm exceeds the print's wall {print_fill.wall_thickness_mm:g} mm: the slicer adds "
             "walls around the engraving, so the printed mass and centre of mass are approximate"
         )
+    com_uncut, com_solid, com_print = com_uncut + body_offset, com_solid + body_offset, com_print + body_offset
+
+    from ..models import solid_angle_model
 
     def model(center_mm: np.ndarray) -> np.ndarray:
         if round_mm > 0:
             return flat_face_probabilities(flat, center_mm)
-        omega = solid_angles(poly, center_mm / scale)
-        return omega / omega.sum()
+        return solid_angle_model(poly, center_mm / scale)
 
     from ..models import to_values
 
@@ -736,8 +741,8 @@ def build_solid(
         return {str(v): float(p) for v, p in zip(design.support, to_values(design, model(center_mm)))}
 
     def sharp_per_value() -> dict[str, float]:
-        omega = solid_angles(poly, poly.centroid)
-        return {str(v): float(p) for v, p in zip(design.support, to_values(design, omega / omega.sum()))}
+        p = solid_angle_model(poly, com_sharp / scale + body_offset / scale)
+        return {str(v): float(p) for v, p in zip(design.support, to_values(design, p))}
 
     predictions = {"sharp": sharp_per_value()}
     if round_mm > 0:

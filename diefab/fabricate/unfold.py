@@ -64,6 +64,8 @@ TAB_MIN_WIDTH = 1.0
 TREE_LIMIT = 20_000
 #: Candidate trees for larger polyhedra.
 HEURISTIC_TREES = 400
+#: Face pairs checked for overlap over all heuristic trees: a die with many faces tries fewer trees.
+PAIR_BUDGET = 4e7
 #: Finalists (the layouts with the smallest faces-only footprint) whose tabs are
 #: built and whose exact bounding rectangle is measured.
 MAX_FINALISTS = 25
@@ -233,7 +235,11 @@ def _edge_lookup(poly: Polyhedron) -> dict[tuple[int, int], int]:
 
 
 def spanning_tree_count(poly: Polyhedron) -> int:
-    """Number of spanning trees of the face-adjacency graph (Kirchhoff's theorem)."""
+    """Number of spanning trees of the face-adjacency graph (Kirchhoff's theorem).
+
+    Exact while it fits a float's mantissa; beyond, its order of magnitude
+    (a die with hundreds of faces has more than 10**300).
+    """
     m = len(poly.faces)
     lap = np.zeros((m, m))
     for a, b in poly.edge_faces:
@@ -241,7 +247,10 @@ def spanning_tree_count(poly: Polyhedron) -> int:
         lap[b, a] -= 1
         lap[a, a] += 1
         lap[b, b] += 1
-    return int(round(np.linalg.det(lap[1:, 1:])))
+    _, log_count = np.linalg.slogdet(lap[1:, 1:])
+    if log_count < 700:
+        return int(round(math.exp(log_count)))
+    return 10 ** int(log_count / math.log(10))
 
 
 def _find(parent: list[int], x: int) -> int:
@@ -410,10 +419,14 @@ def _place(trees: list[tuple[int, ...]], poly, hinges, padded) -> tuple[np.ndarr
         par[t] = parent
         ok = hinge[:, 0] >= 0
         rel[t, ok] = hinges[hinge[ok, 0], hinge[ok, 1]]
+    # pointer jumping: world[f] is the product of the hinges from the root down to f; each pass doubles
+    # the stretch of path it covers (the root's own transform is the identity, and its parent itself)
     world = rel.copy()
     rows = np.arange(len(trees))[:, None]
-    for _ in range(m - 1):
-        world = world[rows, par] @ rel
+    up = par.copy()
+    for _ in range(max(1, int(np.ceil(np.log2(max(m, 2)))))):
+        world = world[rows, up] @ world
+        up = up[rows, up]
     return np.einsum("tmij,mkj->tmki", world, padded)[..., :2], roots
 
 
@@ -444,6 +457,9 @@ def _count_overlaps(world: np.ndarray, sizes: list[int]) -> np.ndarray:
     """
     t, m = world.shape[:2]
     iu, ju = np.triu_indices(m, 1)
+    step = max(1, int(4e6 // len(iu)))  # layouts per pass: bounded memory for dice with many faces
+    if t > step:
+        return np.concatenate([_count_overlaps(world[k : k + step], sizes) for k in range(0, t, step)])
     mask = np.arange(world.shape[2])[None, :] < np.array(sizes)[:, None]
     centre = (world * mask[None, :, :, None]).sum(axis=2) / np.array(sizes)[None, :, None]
     radius = np.linalg.norm(world - centre[:, :, None], axis=-1).max(axis=2)
@@ -680,7 +696,8 @@ def unfold(
     if count <= TREE_LIMIT and math.comb(n_edges, m - 1) <= 20 * TREE_LIMIT:
         trees, method = _all_trees(poly), "all spanning trees"
     else:
-        trees, method = _heuristic_trees(poly, HEURISTIC_TREES, np.random.default_rng(seed)), "heuristic trees"
+        count = max(8, min(HEURISTIC_TREES, int(PAIR_BUDGET / m**2)))
+        trees, method = _heuristic_trees(poly, count, np.random.default_rng(seed)), "heuristic trees"
 
     world, roots = _place(trees, poly, hinges, padded)
     n_clash = _count_overlaps(world, [len(f) for f in poly.faces])

@@ -33,6 +33,10 @@ GEM = Family(
         ),
     ),
     "frustum of a pyramid on an inverted pyramid: 9 faces (the paper's 'gem')",
+    build=lambda params: gem_polyhedron(params),
+    reference="girdle short side",
+    reference_length=lambda poly: 2.0,
+    readability="the value on the face that points up; resting on its top the gem points its apex up",
 )
 
 # Faces exactly as the paper lists them (1-based vertex numbers), outward CCW.

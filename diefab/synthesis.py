@@ -1,0 +1,317 @@
+"""From a target to a die: pick a family and face count, assign values, optimize, check.
+
+:func:`candidates` lists the families and face counts that can carry a
+target's values; :func:`synthesize` optimizes each under a deterministic
+model (its values assigned by :func:`~diefab.assignment.assign_values` on
+the starting shape), keeps the best, and -- with ``model="simulation"`` --
+refines it against pybullet: it drops the die, adds the simulated-minus-
+modelled face frequencies to the model as a correction, re-optimizes, and
+repeats while time is left, keeping the design whose simulated distance to
+the target is smallest.  The caller validates the result on a fresh seed.
+
+Examples
+--------
+>>> from diefab.targets import parse_target
+>>> [(c.family, c.faces) for c in candidates(parse_target("2d6"))][:3]
+[('ngem', 11), ('prism', 11), ('prism', 11)]
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from math import ceil
+
+import numpy as np
+
+from .assignment import assign_values, face_classes
+from .design import Design
+from .errors import DesignError
+from .families import family as get_family
+from .geometry import resting_faces
+from .mass import Fill, mass_properties
+from .models import MODELS
+from .optimize import INFEASIBLE, optimize_design
+from .stats import tvd
+from .targets import Target
+
+__all__ = ["Candidate", "Synthesis", "candidates", "synthesize"]
+
+#: Model used to rank candidates and to start the simulation refinement.
+RANK_MODEL = "fast"
+#: Candidates whose objectives agree to this many decimals rank by how they are read, then by how many
+#: transitional faces they have (the fast model is least sure of them), then by face count.
+RANK_DECIMALS = 3
+#: Drops per simulation of a refinement step (half at the first).
+REFINE_DROPS = 16_000
+#: Shortest re-optimization of a refinement step, seconds.
+MIN_STEP_SECONDS = 10.0
+#: Most refinement steps.
+REFINE_STEPS = 6
+#: Refinement stops once the simulated TVD is below this.
+REFINE_GOAL = 0.008
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A family, its structural parameters and a starting shape, with the number of faces that carry values."""
+
+    family: str
+    params: dict[str, float]
+    faces: int
+
+    def polyhedron(self):
+        return get_family(self.family).polyhedron(self.params)
+
+
+def _symmetric(target: Target) -> bool:
+    """True if the target's probabilities read the same backwards over equally spaced values."""
+    v, q = target.values, target.probabilities
+    return bool(np.allclose(q, q[::-1], atol=1e-12) and np.allclose(np.diff(v), np.diff(v)[0]))
+
+
+def _levels(target: Target) -> int:
+    return len(np.unique(np.round(target.probabilities, 12)))
+
+
+def candidates(target: Target, faces: int | None = None, family: str | None = None) -> list[Candidate]:
+    """Families and face counts that can carry `target`'s values, simplest first.
+
+    Parameters
+    ----------
+    faces : int, optional
+        Only dice with this many resting faces.
+    family : str, optional
+        Only this family.
+
+    Raises
+    ------
+    DesignError
+        If nothing fits.
+    """
+    k = len(target.values)
+    if k < 2:
+        raise DesignError(f"target {target.spec!r} has one value: any die rolls it; give at least two")
+    if np.any(target.probabilities <= 0):
+        v = int(target.values[np.argmax(target.probabilities <= 0)])
+        raise DesignError(f"target {target.spec!r} gives value {v} probability 0: no face can carry it, leave it out")
+    asym = {} if _symmetric(target) else {"sx": 0.1, "sz": 0.05}
+    found: list[Candidate] = []
+    first = max(3, ceil((k - 1) / 2))
+    for n in range(first, min(first + 2, 13)):
+        found.append(Candidate("ngem", {"n": n, "a": 1.3, "b": 0.6, "c": 0.5, "d": 1.5, **asym}, 2 * n + 1))
+    if k <= 6:
+        found.append(Candidate("cuboid", {"x": 1.0, "z": 0.9, "t": 0.1}, 6))
+    if 3 <= k <= 12:  # the lateral faces carry the values, the pointed caps are transitional
+        found.append(Candidate("prism", {"n": k, "l": 1.5, "k": 1.0}, k))
+    n = max(3, k - 2)
+    if n <= 12:
+        found.append(Candidate("prism", {"n": n, "l": 1.0}, n + 2))
+    if _levels(target) <= 2:
+        for n in range(max(3, ceil(k / 2)), 13):
+            if (2 * n) % k == 0:
+                found.append(Candidate("bipyramid", {"n": n, "h": 1.2, "g": 1.0}, 2 * n))
+                found.append(Candidate("trapezohedron", {"n": n, "t": 0.7, "u": 0.8}, 2 * n))
+                break
+    for n in sorted({max(6, k), max(6, k) + 2}):
+        if n <= 30:
+            found.append(Candidate("freeform", {"n": n}, n))
+    if family is not None:
+        get_family(family)  # an unknown name raises with the list of families
+        found = [c for c in found if c.family == family]
+        if not found and faces is not None:
+            found = [_forced(family, faces, asym)]
+    if faces is not None:
+        found = [c for c in found if c.faces == faces] or ([_forced(family, faces, asym)] if family else [])
+        if faces < k:
+            raise DesignError(f"--faces {faces} is fewer than the target's {k} values")
+    if not found:
+        what = f"family {family}" if family else "family"
+        raise DesignError(
+            f"no {what}{'' if faces is None else f' with {faces} faces'} fits the {k} values of target {target.spec!r}"
+        )
+    return sorted(found, key=lambda c: c.faces)
+
+
+def _forced(family: str, faces: int, asym: dict[str, float]) -> Candidate:
+    """The member of `family` with `faces` faces, when the family has one."""
+    if family == "ngem" and faces % 2 == 1 and 7 <= faces <= 25:
+        return Candidate("ngem", {"n": (faces - 1) // 2, "a": 1.3, "b": 0.6, "c": 0.5, "d": 1.5, **asym}, faces)
+    if family == "prism" and 3 <= faces <= 12:
+        return Candidate("prism", {"n": faces, "l": 1.5, "k": 1.0}, faces)
+    if family in ("bipyramid", "trapezohedron") and faces % 2 == 0 and 6 <= faces <= 24:
+        params = {"h": 1.2, "g": 1.0} if family == "bipyramid" else {"t": 0.7, "u": 0.8}
+        return Candidate(family, {"n": faces // 2, **params}, faces)
+    if family == "cuboid" and faces == 6:
+        return Candidate("cuboid", {"x": 1.0, "z": 0.9, "t": 0.1}, 6)
+    if family == "freeform" and 6 <= faces <= 30:
+        return Candidate("freeform", {"n": faces}, faces)
+    raise DesignError(f"family {family!r} has no die with {faces} faces")
+
+
+@dataclass
+class Synthesis:
+    """What :func:`synthesize` found."""
+
+    design: Design
+    objective: float
+    #: (k,) value probabilities under the model the design was optimized for.
+    predicted: np.ndarray
+    model: str
+    #: Every candidate tried: family, faces, objective.
+    tried: list[dict] = field(default_factory=list)
+    #: Refinement steps: simulated TVD at each.
+    steps: list[dict] = field(default_factory=list)
+
+
+def _start(candidate: Candidate, target: Target, name: str, fill: Fill, size_mm: float) -> Design:
+    """The candidate's starting design, values assigned from its starting shape.
+
+    Faces the starting shape cannot rest on are transitional (a capped
+    prism's caps), unless that leaves fewer faces than values.
+    """
+    poly = candidate.polyhedron()
+    center = mass_properties(poly, fill).center
+    resting = resting_faces(poly, center)
+    if resting.sum() < len(target.values):  # too few: every face gets a value, the optimizer makes them rest
+        resting[:] = True
+    probs = MODELS["solid-angle"](poly, center)[resting]
+    names = [n for n, r in zip(poly.names, resting) if r]
+    classes = face_classes(poly, center)[resting]
+    values = assign_values(probs, names, target, classes)
+    transitional = [n for n, r in zip(poly.names, resting) if not r]
+    return Design(name, candidate.family, candidate.params, values=values, target=target.spec, fill=fill,
+                  size_mm=size_mm, transitional=transitional)  # fmt: skip
+
+
+def synthesize(
+    target: Target,
+    *,
+    faces: int | None = None,
+    family: str | None = None,
+    fill: Fill | None = None,
+    model: str = "simulation",
+    budget_seconds: float = 480.0,
+    seed: int = 0,
+    name: str = "die",
+    size_mm: float = 30.0,
+    min_margin: float = 0.05,
+    workers: int | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> Synthesis:
+    """Design a die for `target`.
+
+    Every candidate (:func:`candidates`) is optimized under the solid-angle
+    model, which is cheap, in an equal share of the time; the best (by
+    objective to :data:`RANK_DECIMALS` decimals, then by fewest faces read at
+    a vertex or edge, then by fewest transitional faces, then by fewest
+    faces) is then optimized under `model`.
+
+    Parameters
+    ----------
+    model : {"fast", "solid-angle", "basins", "simulation"}
+        The landing model optimized (``basins`` when registered in
+        :data:`diefab.models.MODELS`); ``simulation`` optimizes the fast
+        model and then refines it against pybullet drops.
+    budget_seconds : float
+        Wall time for the whole search; each stage stops when its share runs out.
+    seed : int
+        Seeds the optimizer's random starts and the refinement's drops.
+
+    Raises
+    ------
+    DesignError
+        If no candidate reaches a stable, readable die.
+    """
+    fill = fill or Fill()
+    say = progress or (lambda text: None)
+    t0 = time.monotonic()
+    final_model = RANK_MODEL if model == "simulation" else model
+    if final_model not in MODELS:
+        raise DesignError(f"model {model!r} is not available (models: {', '.join([*MODELS, 'simulation'])})")
+    pool = candidates(target, faces, family)
+    rank_share = {"simulation": 0.2, "solid-angle": 1.0}.get(model, 0.6) * budget_seconds
+    best, best_key, tried = None, None, []
+    for i, cand in enumerate(pool):
+        deadline = t0 + rank_share * (i + 1) / len(pool)
+        try:
+            start = _start(cand, target, name, fill, size_mm)
+            result = optimize_design(start, model="solid-angle", min_margin=min_margin, starts=2, seed=seed,
+                                     name=name, deadline=deadline)  # fmt: skip
+        except DesignError as exc:
+            tried.append({"family": cand.family, "faces": cand.faces, "objective": None, "error": str(exc)})
+            say(f"{cand.family} ({cand.faces} faces): {exc}")
+            continue
+        key = (round(result.objective, RANK_DECIMALS), _not_on_faces(result.design),
+               len(result.design.transitional_faces))  # fmt: skip
+        tried.append({"family": cand.family, "faces": cand.faces, "objective": result.objective,
+                      "read_off_faces": key[1]})  # fmt: skip
+        say(f"{cand.family} ({cand.faces} faces): Eq. (2) {result.objective:.5f} under the solid-angle model")
+        if best is None or key < best_key:
+            best, best_key = result, key
+    if best is None or best.objective >= INFEASIBLE:
+        raise DesignError(f"no stable, readable die found for target {target.spec!r} (tried {len(tried)} dice)")
+    if final_model != "solid-angle":
+        polish = t0 + (rank_share + (0.1 if model == "simulation" else 0.4) * budget_seconds)
+        try:
+            again = optimize_design(best.design, model=final_model, min_margin=min_margin, starts=1, seed=seed,
+                                    name=name, deadline=polish)  # fmt: skip
+            say(f"{again.design.family}: Eq. (2) {again.objective:.5f} under the {final_model} model")
+            best = again
+        except DesignError as exc:
+            say(f"the {final_model} model finds no stable die from the solid-angle optimum: {exc}")
+    out = Synthesis(best.design, best.objective, best.values, final_model, tried)
+    if model == "simulation":
+        _refine(out, target, t0 + budget_seconds, seed, min_margin, workers, say)
+    return out
+
+
+def _not_on_faces(design: Design) -> int:
+    """How many resting faces are read at a vertex or edge rather than on a face (the gem's apex excepted)."""
+    from .readings import readings
+
+    found = readings(design.polyhedron)
+    apex = design.family in ("gem", "ngem")
+    k = [design.polyhedron.face_index(n) for n in design.values]
+    return sum(
+        1 for i in k if found[i] is None or (found[i].kind != "face" and not (apex and found[i].kind == "vertex"))
+    )
+
+
+def _refine(out: Synthesis, target: Target, deadline: float, seed: int, min_margin: float, workers, say) -> None:
+    """Correct the model by simulation until the simulated TVD is small or time runs out (updates `out`)."""
+    from .physics import simulate
+
+    goal = target.aligned(out.design.support)
+    design, objective, predicted = out.design, out.objective, out.predicted
+    best_tvd = np.inf
+    per_drop = 0.0
+    for step in range(REFINE_STEPS):
+        drops = REFINE_DROPS if step else REFINE_DROPS // 2
+        if time.monotonic() + per_drop * drops > deadline:
+            break
+        sim = simulate(design, drops, seed=seed + step, workers=workers)
+        per_drop = sim.seconds / drops
+        distance = tvd(sim.value_probabilities(design), goal)
+        out.steps.append(
+            {"step": step, "drops": drops, "params": dict(design.params), "simulated_tvd": float(distance)}
+        )
+        say(f"refinement {step}: simulated TVD {distance:.4f} at {drops} drops")
+        if distance < best_tvd:
+            best_tvd = distance
+            out.design, out.objective, out.predicted = design, objective, predicted
+        if distance < REFINE_GOAL or time.monotonic() > deadline:
+            break
+        center = design.mass_properties().center
+        correction = sim.face_probabilities - MODELS[RANK_MODEL](design.polyhedron, center)
+        try:
+            # leave time for the next simulation, which judges this step
+            stop = max(time.monotonic() + MIN_STEP_SECONDS, deadline - per_drop * REFINE_DROPS)
+            result = optimize_design(design, model=RANK_MODEL, min_margin=min_margin, starts=0, seed=seed,
+                                     name=design.name, correction=correction, deadline=stop)  # fmt: skip
+        except DesignError:
+            break
+        design = replace(result.design, description=design.description)
+        objective, predicted = result.objective, result.values
+    out.model = "simulation"

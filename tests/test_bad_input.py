@@ -1,0 +1,575 @@
+"""Hostile input, one row per case: every command fails with one line and exit 2, writes nothing it
+should not, and leaves no file half-written, no input replaced and no process behind.
+
+Classes of cases: type confusion in every design-file field, path traversal through names, overflow,
+options that do not apply, half-finished multi-file outputs, replaced inputs, stale temporary files,
+a Dask address that is not a scheduler, and signals to the parent of the simulation workers.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+import tomli_w
+
+from diefab.design import template_path
+
+GEM = tomllib.loads(Path(str(template_path("fudge-gem"))).read_text())
+CUBE = tomllib.loads(Path(str(template_path("d6"))).read_text())
+BASES = {"gem": GEM, "cube": CUBE, "mesh": {"name": "m", "family": "mesh", "target": "uniform:6", "mesh": "m.stl"}}
+
+
+def _design(tmp_path: Path, base: str, key: str | None = None, value=None) -> Path:
+    """The base design with `key` (dotted: ``params.a``, ``vertices.0.1``) set to `value`, as a file."""
+    data = json.loads(json.dumps(BASES[base]))
+    if key is not None:
+        *parents, last = key.split(".")
+        node = data
+        for part in parents:
+            node = node[int(part)] if isinstance(node, list) else node.setdefault(part, {})
+        if isinstance(node, list):
+            node[int(last)] = value
+        else:
+            node[last] = value
+    path = tmp_path / "design.toml"
+    path.write_text(tomli_w.dumps(data))
+    return path
+
+
+def _tree(root: Path) -> set[Path]:
+    return {p for p in root.rglob("*")}
+
+
+# ----------------------------------------------------------------------
+# type confusion: every field of a design file
+
+TYPES = [
+    # (base design, field, wrong value, words of the one-line error)
+    ("gem", "name", 5, "name = 5 is an integer, not a string"),
+    ("gem", "name", "a\x00b", "control character"),
+    ("gem", "name", " ", "empty"),
+    ("gem", "description", 5, "not a string"),
+    ("gem", "family", 5, "not a string"),
+    ("gem", "target", 5, "target = 5 is an integer"),
+    ("gem", "target", [1, 4, 10], "array"),
+    ("gem", "size_mm", True, "boolean"),
+    ("gem", "size_mm", "30", "string"),
+    ("gem", "size_mm", -1, "positive"),
+    ("gem", "size_mm", 1e300, "magnitude"),
+    ("gem", "params", "abcd", "params = 'abcd' is a string, not a table"),
+    ("gem", "params.a", True, "params.a = true is a boolean"),
+    ("gem", "params.a", "1.18", "params.a = '1.18' is a string"),
+    ("gem", "params.a", [1.18], "array"),
+    ("gem", "params.b", 0.95, "b=0.95 is outside [0.3, 0.9]"),
+    ("gem", "values", 5, "values = 5 is an integer, not a table"),
+    ("gem", "values.f1", 1.5, "values.f1 = 1.5 is a float, not an integer"),
+    ("gem", "values.f1", True, "boolean"),
+    ("gem", "values.f1", "3", "string"),
+    ("gem", "labels", "x", "labels = 'x' is a string, not a table"),
+    ("gem", "labels.f5", 4, "not a string"),
+    ("gem", "fill", 3, "fill = 3 is an integer, not a table"),
+    ("gem", "fill.kind", 3, "fill.kind = 3 is an integer, not a string"),
+    ("gem", "fill.wall_mm", "x", "fill.wall_mm = 'x' is a string, not a number"),
+    ("gem", "fill.infill", True, "fill.infill = true is a boolean"),
+    ("gem", "physics", 3, "physics = 3 is an integer, not a table"),
+    ("gem", "physics.restitution", "0.3", "restitution"),
+    ("gem", "physics.restitution", True, "restitution"),
+    ("gem", "physics.friction", -1, "friction"),
+    ("gem", "physics.gravitas", 1, "unknown physics setting"),
+    ("gem", "center_of_mass", [0, 0], "center_of_mass has 2 items, not 3"),
+    ("gem", "center_of_mass", [0, 0, "x"], "center_of_mass[2]"),
+    ("gem", "inertia", 1.0, "inertia = 1.0 is a float, not an array"),
+    ("gem", "inertia", [[1, 0, 0], [0, 1, 0]], "inertia has 2 items"),
+    ("gem", "inertia", [[1, 0, 0], [0, 1, 0], [0, 0, True]], "inertia[2][2] = true is a boolean"),
+    ("gem", "transitional", "f3", "transitional = 'f3' is a string, not an array"),
+    ("gem", "transitional", [3], "transitional[0] = 3"),
+    ("gem", "merge_tolerance_mm", 0, "merge_tolerance_mm = 0 is not a positive number"),
+    ("gem", "merge_tolerance_mm", True, "boolean"),
+    ("cube", "vertices", 5, "vertices = 5 is an integer, not an array"),
+    ("cube", "vertices.0", [1, 1], "vertices[0] has 2 items, not 3"),
+    ("cube", "vertices.0.0", "1", "vertices[0][0] = '1' is a string"),
+    ("cube", "vertices.0.0", 1e300, "magnitude"),
+    ("cube", "vertices.0.0", -1e300, "magnitude"),
+    ("cube", "faces", 5, "faces = 5 is an integer, not an array"),
+    ("cube", "faces.0.1", 1.5, "faces[0][1] = 1.5 is a float, not an integer"),
+    ("cube", "faces.0.1", True, "faces[0][1] = true is a boolean"),
+    ("cube", "faces.0.1", -1, "not a vertex index"),
+    ("mesh", "mesh", 5, "mesh = 5 is an integer, not a string"),
+]
+
+
+@pytest.mark.parametrize(("base", "key", "value", "words"), TYPES, ids=[f"{b}-{k}={v!r}" for b, k, v, _ in TYPES])
+def test_wrong_type_in_a_design_file(tmp_path, bad, base, key, value, words):
+    line = bad("predict", _design(tmp_path, base, key, value))
+    assert line.startswith("diefab: error: ") and words in line
+
+
+def test_a_design_file_nested_too_deep(tmp_path, bad):
+    path = tmp_path / "deep.toml"
+    path.write_text('name = "x"\nfamily = "gem"\na = ' + "[" * 100_000 + "]" * 100_000 + "\n")
+    assert "nested too deeply" in bad("predict", path)
+
+
+@pytest.mark.parametrize("command", ["predict", "net", "stl", "validate"])
+def test_physics_table_is_checked_by_every_command(tmp_path, bad, command):
+    path = _design(tmp_path, "gem", "physics.restitution", 1.5)
+    assert (
+        "restitution" in bad(command, path, "--out", tmp_path / "out")
+        if command in ("net", "stl")
+        else bad(command, path)
+    )
+    assert not (tmp_path / "out").exists()
+
+
+# ----------------------------------------------------------------------
+# API: wrongly typed arguments raise a DiefabError, not a bare TypeError
+
+
+def _api_cases():
+    from diefab.design import Design
+    from diefab.physics import PhysicsSettings
+    from diefab.stats import goodness_of_fit, parse_counts
+    from diefab.targets import parse_target
+
+    counts = [0, 20, 48, 80, 89, 83, 66, 17, 2]
+    p = np.array([1, 4, 10, 16, 19, 16, 10, 4, 1]) / 81
+    gem = {"a": 1.18, "b": 0.52, "c": 0.72, "d": 1.41}
+    return {
+        "physics-int": lambda: PhysicsSettings.from_mapping(3),
+        "target-int": lambda: parse_target(5, [-1, 0, 1]),
+        "target-values": lambda: parse_target("4df", ["a"]),
+        "fit-unnormalized": lambda: goodness_of_fit(counts, np.ones(9)),
+        "fit-alpha-nan": lambda: goodness_of_fit(counts, p, alpha=float("nan")),
+        "fit-huge-count": lambda: goodness_of_fit([2**63, *counts[1:]], p),
+        "fit-text-counts": lambda: goodness_of_fit(["x"] * 9, p),
+        "design-params-str": lambda: Design("x", "gem", params="abcd"),
+        "design-param-bool": lambda: Design("x", "gem", params={**gem, "a": True}),
+        "design-param-str": lambda: Design("x", "gem", params={**gem, "a": "1.18"}),
+        "design-values-int": lambda: Design("x", "gem", params=gem, values=5),
+        "design-target-int": lambda: Design("x", "gem", params=gem, target=5),
+        "design-size-bool": lambda: Design("x", "gem", params=gem, size_mm=True),
+        "counts-empty-field": lambda: parse_counts("0,20,,48"),
+    }
+
+
+@pytest.mark.parametrize("case", sorted(_api_cases()))
+def test_api_raises_typed_errors(case):
+    from diefab.errors import DiefabError
+
+    with pytest.raises(DiefabError):
+        _api_cases()[case]()
+
+
+# ----------------------------------------------------------------------
+# path traversal: no name leads a file out of --out
+
+TRAVERSAL = [
+    # (design name, extra arguments, command)
+    ("../../escape", ["net", "--format", "svg"]),
+    ("/tmp/diefab-escape", ["net", "--format", "svg"]),
+    ("..", ["net", "--format", "svg"]),
+    ("sub/../../escape", ["optimize", "--starts", "0", "--free", "a"]),
+    ("fudge-gem", ["optimize", "--starts", "0", "--free", "a", "--name", "../../escape"]),
+    ("fudge-gem", ["optimize", "--starts", "0", "--free", "a", "--name", "/tmp/diefab-escape"]),
+]
+
+
+@pytest.mark.parametrize(("name", "args"), TRAVERSAL, ids=[f"{a[0]}:{n}" for n, a in TRAVERSAL])
+def test_no_write_outside_out(tmp_path, run, name, args):
+    work = tmp_path / "a" / "b"
+    work.mkdir(parents=True)
+    path = _design(work, "gem", "name", name)
+    before = _tree(tmp_path)
+    code, out, err = run(args[0], path, *args[1:], "--out", work / "out")
+    assert code == 0, err
+    new = _tree(tmp_path) - before
+    assert new and all(p == work / "out" or work / "out" in p.parents for p in new), new
+    assert not Path("/tmp/diefab-escape-net.svg").exists() and not Path("/tmp/diefab-escape.toml").exists()
+
+
+def test_simulation_run_folder_stays_in_out(tmp_path, run):
+    before = _tree(tmp_path)
+    args = ["--start", "design", "--sims-per-eval", "16", "--max-evals", "1", "--workers", "1"]
+    code, _, err = run("optimize", "fudge-gem", "--model", "simulation", "--name", "../../up", *args,
+                       "--out", tmp_path / "out")  # fmt: skip
+    assert code == 0, err
+    new = _tree(tmp_path) - before
+    assert new and all(p == tmp_path / "out" or tmp_path / "out" in p.parents for p in new)
+
+
+@pytest.mark.parametrize(("length", "ok"), [(240, True), (250, False)])
+def test_long_names_fail_only_when_the_file_name_would(tmp_path, run, length, ok):
+    path = _design(tmp_path, "gem", "name", "g" * length)
+    code, _, err = run("net", path, "--format", "svg", "--out", tmp_path / "out")
+    assert (code == 0) == ok, err
+    if not ok:
+        assert code == 2 and "255" in err and len(err.strip().splitlines()) == 1
+    assert len(list((tmp_path / "out").glob("*.svg"))) == ok
+
+
+# ----------------------------------------------------------------------
+# overflow, out-of-range numbers, and options that do not apply
+
+BAD_ARGS = [
+    (["stats", "--counts", "1e20,20,48,80,89,83,66,17,2", "--target", "4df"], "1e+15"),
+    (["stats", "--counts", f"{2**63},20,48,80,89,83,66,17,2", "--target", "4df"], "1e+15"),
+    (["stats", "--counts", "0,20,,48,80,89,83,66,17,2", "--target", "4df"], "empty"),
+    (["stats", "--counts", "0,20,48,80,89,83,66,17,2", "--target", "4df", "--alpha", "nan"], "alpha"),
+    (["stats", "--counts", "0,20,48,80,89,83,66,17,2", "--target", "4df", "--seed", "-1"], "--seed"),
+    (["stats", "--counts", "1,1", "--target", "9" * 5000 + "d6"], "unknown target"),
+    (["stats", "--counts", "5,0", "--target", "1,0"], "nothing to test"),
+    (["predict", "fudge-gem", "--target", "1e400,1,1,1,1,1,1,1,1"], "not finite"),
+    (["optimize", "fudge-gem", "--seed", "-1"], "--seed"),
+    (["optimize", "fudge-gem", "--budget", "-1"], "--budget applies only to --model simulation"),
+    (["optimize", "fudge-gem", "--workers", "-3"], "--workers applies only to --model simulation"),
+    (["optimize", "fudge-gem", "--resume", "/nonexistent"], "--resume applies only to --model simulation"),
+    (["optimize", "fudge-gem", "--model", "simulation", "--workers", "5000"], "--workers"),
+    (["optimize", "fudge-gem", "--model", "simulation", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"],
+     "--workers does not apply with --scheduler"),
+    (["optimize", "fudge-gem", "--model", "simulation", "--resume", "/nonexistent"], "does not exist"),
+    (["validate", "fudge-gem", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "--workers does not apply"),
+    (["validate", "fudge-gem", "--seed", "-1"], "--seed"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("args", "words"), BAD_ARGS, ids=[" ".join(a)[:60] for a, _ in BAD_ARGS])
+def test_bad_arguments(tmp_path, bad, monkeypatch, args, words):
+    monkeypatch.chdir(tmp_path)
+    line = bad(*args, *(["--out", tmp_path / "out"] if args[0] == "optimize" else []))
+    assert words in line and len(line) <= 1100
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").rglob("*"))
+
+
+ROLL_LOGS = [
+    # (roll log text, words)
+    ("1 2 " + "9" * 30 + "\n", "not a die value"),
+    ("0 " + "7" * 5_000_000 + "\n", "not a die value"),
+    ("value\n1\n\u22123\nx\n", ":4"),
+]
+
+
+@pytest.mark.parametrize("command", [["predict"], ["stats", "--target", "4df", "--rolls"]])
+def test_a_device_is_not_read_as_an_input(bad, command):
+    if not Path("/dev/zero").exists():
+        pytest.skip("no /dev/zero")
+    assert "not a regular file" in bad(*command, "/dev/zero")
+
+
+@pytest.mark.parametrize(("text", "words"), ROLL_LOGS, ids=["huge", "5-million-digits", "garbage"])
+def test_bad_roll_logs(tmp_path, bad, text, words):
+    log = tmp_path / "rolls.txt"
+    log.write_text(text)
+    line = bad("stats", "--rolls", log, "--target", "4df")
+    assert words in line and len(line) <= 1100
+
+
+def test_huge_target_weights_are_a_distribution(run):
+    code, out, err = run("predict", "fudge-gem", "--target", ",".join(["1e308"] * 9), "--json")
+    assert code == 0, err
+    assert list(json.loads(out)["target_values"].values()) == pytest.approx([1 / 9] * 9)
+
+
+def test_a_parameter_on_its_bound_is_in_the_family():
+    from diefab.design import load_design
+    from diefab.families import family
+    from diefab.optimize import Problem
+
+    design = load_design("fudge-gem")
+    problem = Problem(design, ("a", "b", "c", "d", "e"), "solid-angle", "eq2", 0.0)
+    for x in np.concatenate([1 - np.arange(2000) * 5e-17, np.arange(2000) * 1e-18]):  # lo + x (hi - lo) rounds up
+        params = problem.params(np.full(5, x))
+        assert params == family("gem").check_params(params)  # no bound overstepped by rounding
+
+
+# ----------------------------------------------------------------------
+# outputs: all or nothing, never an input, no stale temporary files
+
+
+@pytest.mark.parametrize(
+    ("args", "blocked", "kept"),
+    [
+        (["net", "fudge-gem", "--format", "svg,pdf"], "fudge-gem-net.pdf", "fudge-gem-net.svg"),
+        (["stl", "fudge-gem", "--format", "stl,3mf"], "fudge-gem.3mf", "fudge-gem.stl"),
+    ],
+)
+def test_a_failing_output_leaves_the_others_as_they_were(tmp_path, bad, args, blocked, kept):
+    out = tmp_path / "out"
+    (out / blocked).mkdir(parents=True)  # this output cannot be written
+    (out / kept).write_text("old")
+    assert "not a regular file" in bad(*args, "--out", out)
+    assert (out / kept).read_text() == "old"
+    assert sorted(p.name for p in out.iterdir()) == sorted([blocked, kept])
+
+
+def test_write_files_restores_replaced_files_when_a_rename_fails(tmp_path, monkeypatch):
+    from diefab import files
+    from diefab.errors import OutputError
+
+    (tmp_path / "a.txt").write_text("old a")
+    real = os.replace
+    calls = []
+
+    def failing(src, dst):
+        calls.append(dst)
+        if len(calls) == 2:
+            raise OSError(28, "No space left on device")
+        return real(src, dst)
+
+    monkeypatch.setattr(files.os, "replace", failing)
+    with pytest.raises(OutputError, match="b.txt"):
+        files.write_files({tmp_path / "a.txt": "new a", tmp_path / "b.txt": "new b"})
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.txt"]
+    assert (tmp_path / "a.txt").read_text() == "old a"
+
+
+def test_stl_refuses_to_replace_its_mesh(tmp_path, bad):
+    import trimesh
+
+    trimesh.creation.box((2, 2, 2)).export(tmp_path / "m.stl")
+    before = (tmp_path / "m.stl").read_bytes()
+    design = tmp_path / "m.toml"
+    design.write_text(tomli_w.dumps({**BASES["mesh"], "values": {f"f{i}": i for i in range(1, 7)}}))
+    line = bad("stl", design, "--out", tmp_path)
+    assert "refusing to write" in line and "input" in line
+    assert (tmp_path / "m.stl").read_bytes() == before
+
+
+def test_optimize_refuses_to_replace_its_design(tmp_path, bad):
+    design = tmp_path / "mine.toml"
+    design.write_text(tomli_w.dumps({**GEM, "name": "mine"}))
+    before = design.read_text()
+    assert "refusing to write" in bad("optimize", design, "--name", "mine", "--starts", "0", "--out", tmp_path)
+    assert design.read_text() == before
+
+
+def test_stale_temporary_files_of_dead_writers_are_removed(tmp_path, run):
+    out = tmp_path / "out"
+    out.mkdir()
+    dead = 2**22 + 12345  # above Linux's largest pid: no such process
+    stale = out / f".fudge-gem-net.svg.{dead}.abcd_123.tmp"
+    live = out / f".fudge-gem-net.svg.{os.getppid()}.abcd_123.tmp"  # a running process: maybe mid-write
+    elsewhere = out / f".another-die.stl.{dead}.zz_9abcd.tmp"  # of another output: the same writer's fate
+    other = out / ".notes.tmp"
+    for path in (stale, live, elsewhere, other):
+        path.write_text("x")
+    code, _, err = run("net", "fudge-gem", "--format", "svg", "--out", out)
+    assert code == 0, err
+    assert not stale.exists() and not elsewhere.exists() and live.exists() and other.exists()
+    assert not list(out.glob(f".*.{os.getpid()}.*.tmp"))
+
+
+# ----------------------------------------------------------------------
+# simulation runs: a failed start leaves nothing, the budget is kept
+
+
+def test_a_failed_start_does_not_block_the_rerun(tmp_path, bad, run):
+    args = ["optimize", "fudge-gem", "--model", "simulation", "--start", "design", "--sims-per-eval", "16",
+            "--max-evals", "1", "--out", tmp_path]  # fmt: skip
+    assert "cannot reach Dask scheduler" in bad(*args, "--scheduler", "tcp://127.0.0.1:1")
+    assert not any(tmp_path.iterdir())
+    leftover = tmp_path / "fudge-gem-simulation-opt"  # what a failed start used to leave: no evaluation logged
+    leftover.mkdir()
+    (leftover / "run.json").write_text("{}")
+    (leftover / "evaluations.jsonl").write_text("")
+    code, out, err = run(*args, "--workers", "1", "--budget", "3", "--json")
+    assert code == 0, err
+    folder = Path(json.loads(out)["run_folder"])
+    spec = json.loads((folder / "run.json").read_text())
+    assert spec["budget_minutes"] == 3 and spec["max_evaluations"] == 1
+    # resuming keeps the stored budget unless a new one is given
+    code, out, err = run(*args[:-2], "--max-evals", "2", "--workers", "1", "--resume", folder, "--json")
+    assert code == 0, err
+    assert json.loads((folder / "run.json").read_text())["budget_minutes"] == 3
+    code, out, err = run(*args[:-2], "--max-evals", "2", "--budget", "5", "--workers", "1", "--resume", folder)
+    assert code == 0, err
+    assert json.loads((folder / "run.json").read_text())["budget_minutes"] == 5
+    assert not list(tmp_path.rglob("*.tmp"))  # every rewrite of run.json and the best design was atomic
+
+
+# ----------------------------------------------------------------------
+# a scheduler address that is not a Dask scheduler
+
+
+class _Server:
+    """A TCP server on 127.0.0.1 that stays silent or sends `greeting`, for at most `life` seconds."""
+
+    def __init__(self, greeting: bytes | None, life: float = 30.0) -> None:
+        self.sock = socket.create_server(("127.0.0.1", 0))
+        self.sock.settimeout(life)
+        self.port = self.sock.getsockname()[1]
+        self.greeting = greeting
+        self.thread = threading.Thread(target=self._serve, daemon=True)
+        self.thread.start()
+
+    def _serve(self) -> None:
+        conns = []
+        try:
+            while True:
+                conn, _ = self.sock.accept()
+                conns.append(conn)
+                if self.greeting:
+                    conn.sendall(self.greeting)
+        except OSError:
+            pass
+        finally:
+            for conn in conns:
+                conn.close()
+
+    def close(self) -> None:
+        self.sock.close()
+
+
+@pytest.mark.parametrize(
+    "greeting",
+    [None, b"HTTP/1.0 400 Bad Request\r\nContent-Type: text/html\r\n\r\n", os.urandom(64)],
+    ids=["silent", "http", "garbage"],
+)
+def test_a_scheduler_address_that_is_not_dask_fails_fast(bad, greeting):
+    server = _Server(greeting)
+    try:
+        started = time.monotonic()
+        line = bad("validate", "fudge-gem", "--sims", "10", "--scheduler", f"tcp://127.0.0.1:{server.port}")
+        assert "cannot reach Dask scheduler" in line
+        assert time.monotonic() - started < 25  # bounded, not a timing claim: the old behaviour hung
+    finally:
+        server.close()
+
+
+# ----------------------------------------------------------------------
+# signals to the parent: its workers go with it
+
+
+def _children(pid: int) -> set[int]:
+    out: set[int] = set()
+    for task in Path(f"/proc/{pid}/task").glob("*/children"):
+        try:
+            out |= {int(c) for c in task.read_text().split()}
+        except FileNotFoundError:
+            pass
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except FileNotFoundError:
+        return False
+    return "zombie" not in status
+
+
+SIM = ["optimize", "fudge-gem", "--model", "simulation", "--start", "design", "--sims-per-eval", "200000"]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+@pytest.mark.parametrize(
+    ("args", "signum", "delay"),
+    [
+        (["validate", "fudge-gem", "--sims", "2000000", "--workers", "2"], signal.SIGKILL, 0.5),
+        (["validate", "fudge-gem", "--sims", "2000000", "--workers", "2"], signal.SIGHUP, 0.5),
+        # while the workers are being forked (an interrupt raised in a fork hook used to be swallowed)
+        (["validate", "fudge-gem", "--sims", "2000000", "--workers", "2"], signal.SIGHUP, 0.0),
+        ([*SIM, "--workers", "2"], signal.SIGKILL, 0.5),
+        ([*SIM, "--workers", "2", "--budget", "7"], signal.SIGHUP, 0.5),
+    ],
+    ids=["validate-SIGKILL", "validate-SIGHUP", "validate-SIGHUP-at-fork", "optimize-SIGKILL", "optimize-SIGHUP"],
+)
+def test_workers_die_with_their_parent(tmp_path, args, signum, delay):
+    proc = subprocess.Popen([sys.executable, "-m", "diefab", *args, *(["--out", str(tmp_path)] if args[0] ==
+                             "optimize" else [])], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            cwd=tmp_path)  # fmt: skip
+    children: set[int] = set()
+    deadline = time.monotonic() + 90
+    try:
+        while len(children) < (2 if delay else 1) and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.01)
+            children |= _children(proc.pid)
+        assert children, proc.stderr.read() if proc.poll() is not None else "no workers started"
+        time.sleep(delay)
+        proc.send_signal(signum)
+        _, err = proc.communicate(timeout=30)
+        if signum == signal.SIGHUP:  # a hang-up ends the run like Ctrl-C
+            assert proc.returncode == 130 and len(err.strip().splitlines()) == 1, err
+        if args[0] == "optimize" and signum == signal.SIGHUP:  # how to resume, and the budget it keeps
+            assert "--resume" in err and "budget of 7 minutes" in err
+            run = json.loads((tmp_path / "fudge-gem-simulation-opt" / "run.json").read_text())
+            assert run["budget_minutes"] == 7
+        deadline = time.monotonic() + 10
+        while any(map(_alive, children)) and time.monotonic() < deadline:
+            time.sleep(0.2)
+        assert not any(map(_alive, children))
+    finally:
+        for pid in [proc.pid, *children]:
+            if _alive(pid):
+                os.kill(pid, signal.SIGKILL)
+        proc.wait(timeout=10)
+
+
+# ----------------------------------------------------------------------
+# any value in any field: a design or a DiefabError, never another exception
+
+
+def _toml_values():
+    from hypothesis import strategies as st
+
+    scalars = (
+        st.booleans()
+        | st.integers(min_value=-(2**63), max_value=2**63 - 1)
+        | st.floats(allow_nan=True, allow_infinity=True)
+        | st.text(max_size=8)
+        | st.sampled_from(["f1", "4df", "solid", "print", "gem", "m.stl", "1,2,3"])
+    )
+    return st.recursive(
+        scalars,
+        lambda inner: (
+            st.lists(inner, max_size=5) | st.dictionaries(st.sampled_from(["a", "f1", "kind", "x"]), inner, max_size=3)
+        ),  # fmt: skip
+        max_leaves=12,
+    )
+
+
+FUZZ_FIELDS = [*sorted({"name", "description", "family", "target", "size_mm", "params", "values", "labels", "fill",
+               "physics", "vertices", "faces", "mesh", "center_of_mass", "inertia", "transitional",
+               "merge_tolerance_mm"}), "params.a", "values.f1", "labels.f5", "fill.wall_mm", "physics.friction",
+               "vertices.0", "faces.0"]  # fmt: skip
+
+
+@pytest.mark.parametrize("field", FUZZ_FIELDS)
+def test_any_value_in_any_field_is_a_design_or_a_diefab_error(field, tmp_path):
+    from hypothesis import HealthCheck, given, settings
+
+    from diefab.design import parse_design
+    from diefab.errors import DiefabError
+
+    base = "cube" if field.split(".")[0] in ("vertices", "faces") else "gem"
+
+    @settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @given(value=_toml_values())
+    def check(value):
+        text = _design(tmp_path, base, field, value).read_text()
+        try:
+            parse_design(text, source="fuzz.toml", base=tmp_path)
+        except DiefabError:
+            pass
+
+    check()
+
+
+def test_a_full_disk_under_stdout_is_one_line(tmp_path):
+    if not Path("/dev/full").exists():
+        pytest.skip("no /dev/full")
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-m", "diefab", "predict", "fudge-gem", "--json"], stdout=full,
+                              stderr=subprocess.PIPE, text=True, timeout=120)  # fmt: skip
+    assert proc.returncode == 2
+    assert proc.stderr.strip().splitlines() == ["diefab: error: No space left on device"]
