@@ -116,7 +116,8 @@ def simulated(designs, drops: int, seed: int, which: str, cache: dict, workers: 
     settings = PhysicsSettings().as_dict()
     out = []
     for i, d in enumerate(designs):
-        fill = d.fill.kind
+        # a made fill's settings are part of what was simulated (the print model has changed before)
+        fill = d.fill.kind if d.fill.kind in ("solid", "shell") else json.dumps(d.fill.to_mapping(), sort_keys=True)
         key = _key(dict(d.params), drops, seed, settings, physics_version(), fill)
         if key not in cache:
             t = time.perf_counter()
@@ -277,7 +278,7 @@ def main(argv=None) -> None:
     ap.add_argument("--designs", type=int, default=20, help="test designs")
     ap.add_argument("--drops", type=int, default=30_000, help="drops per test design")
     ap.add_argument("--test-seed", type=int, default=TEST_SEED, help="design seed of the test set")
-    ap.add_argument("--fill", choices=("solid", "shell", "print"), default="solid",
+    ap.add_argument("--fill", choices=("solid", "shell", "paper", "print"), default="solid",
                     help="fill of the test gems (the discrepancy was learned on solid ones)")  # fmt: skip
     ap.add_argument("--train-designs", type=int, default=800)
     ap.add_argument("--train-drops", type=int, default=4_000)

@@ -30,7 +30,7 @@ from .errors import DesignError, GeometryError
 from .families import family
 from .families.base import default_length
 from .geometry import Polyhedron, face_margins, resting_faces
-from .mass import Fill, MassProperties, mass_properties, mesh_mass_properties, stated
+from .mass import Fill, MassProperties, mesh_mass_properties, stated
 from .meshes import ClosedMesh
 from .schema import check_design_data, check_mapping
 from .targets import Target, parse_target
@@ -362,10 +362,11 @@ class Design:
         return {k: out[k] for k in self.polyhedron.names if out.get(k)}
 
     def mass_properties(self, fill: Fill | None = None) -> MassProperties:
-        """Mass properties in model units for the design's (or the given) fill.
+        """Mass properties in model units for the design's (or the given) fill, as made.
 
-        A non-convex ``mesh`` body's come from the mesh itself, a convex
-        die's from its polyhedron; a stated ``center_of_mass`` and
+        A paper die includes the glue tabs of its net, a print its engraved
+        labels (see :mod:`diefab.bodies`).  A non-convex ``mesh`` body's come
+        from the mesh itself, a convex die's from its polyhedron; a stated ``center_of_mass`` and
         ``inertia`` replace the computed ones (whatever the fill).
         """
         fill = fill or self.fill
@@ -373,7 +374,9 @@ class Design:
         if mesh is not None and not self._mesh_is_convex:
             props = mesh_mass_properties(mesh, fill, mm_per_unit=self.mm_per_unit)
         else:
-            props = mass_properties(self.polyhedron, fill, mm_per_unit=self.mm_per_unit)
+            from .bodies import body_properties
+
+            props = body_properties(self, fill)
         if self.center_of_mass is None and self.inertia is None:
             return props
         s = self._file_scale
@@ -500,8 +503,8 @@ def parse_design(content: str, *, source: str = "<string>", base: Path | None = 
         if key not in data:
             raise DesignError(f"{source}: missing key {key!r}")
     try:
-        fill = Fill(**data.get("fill", {}))
-    except TypeError as exc:
+        fill = Fill.from_mapping(data.get("fill", {}), "[fill]")
+    except DesignError as exc:
         raise DesignError(f"{source}: [fill]: {exc}") from exc
     kwargs = {
         k: data[k] for k in ("name", "family", "params", "values", "target", "labels", "description") if k in data
@@ -564,7 +567,7 @@ def design_to_toml(design: Design, *, comment: str = "") -> str:
         data["inertia"] = [list(r) for r in design.inertia]
     if design.labels:
         data["labels"] = dict(design.labels)
-    data["fill"] = {"kind": design.fill.kind, "wall_mm": design.fill.wall_mm, "infill": design.fill.infill}
+    data["fill"] = design.fill.to_mapping()
     if design.physics:
         data["physics"] = dict(design.physics)
     header = "".join(f"# {line}\n" for line in comment.splitlines())

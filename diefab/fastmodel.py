@@ -488,7 +488,14 @@ class Discrepancy:
         Faces the die cannot rest on stay at 0; the result is renormalized.
         """
         weight = float(np.clip(margins.min() / self.margins.min(), 0.0, 1.0))
-        r = self(params, margins, p) if weight > 0 else None
+        # The training gems are mirror-symmetric, so their coordinates are too; a centre of mass a little off
+        # the mirror planes (a paper die's glue tabs) must not take the interpolant off that set, where it is
+        # steep: the coordinates are the mirror-class means.
+        sym_margins, sym_p = np.array(margins, dtype=float), np.array(p, dtype=float)
+        for i, j in _GEM_MIRRORS:
+            sym_margins[[i, j]] = sym_margins[[i, j]].mean()
+            sym_p[[i, j]] = sym_p[[i, j]].mean()
+        r = self(params, sym_margins, sym_p) if weight > 0 else None
         if r is None:
             return p
         out = np.clip(p + weight * r, 0, None)

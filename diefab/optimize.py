@@ -118,7 +118,7 @@ class Problem:
             poly = _polyhedron(design, params)
         except DesignError:
             return INVALID, np.full(len(design.support), np.nan), np.full(len(design.values), -np.inf)
-        center = mass_properties(poly, design.fill, mm_per_unit=design.mm_per_unit).center
+        center = mass_properties(poly, design.fill, mm_per_unit=design.mm_per_unit, tabs=self._tabs).center
         margins = face_margins(poly, center)
         probs = MODELS[self.model](poly, center)
         if self.correction is not None:
@@ -153,6 +153,16 @@ class Problem:
     def _readable(self, poly: Polyhedron) -> bool:
         """True if every resting face can be read (:mod:`diefab.readings`; hand-set labels excepted)."""
         return unreadable(poly, self.design.values, tuple(self.design.labels)) is None
+
+    @cached_property
+    def _tabs(self):
+        """A paper die's glue tabs: those of the start design's net, carried to every candidate."""
+        fill = self.design.fill
+        if fill.kind != "paper" or not fill.tabs:
+            return None
+        from .bodies import tab_shapes
+
+        return tab_shapes(self.design.polyhedron, self.design.mm_per_unit, fill.tab_mm)
 
     @cached_property
     def _value_index(self) -> np.ndarray:

@@ -105,6 +105,11 @@ def word(where: str, value: Any) -> None:
         raise DesignError(f"{where} is empty")
 
 
+def flag(where: str, value: Any) -> None:
+    if not isinstance(value, bool):
+        _fail(where, value, "true or false")
+
+
 def table(item: Check | None = None) -> Check:
     """A TOML table, each value checked by `item` (None: left to the design)."""
 
@@ -168,7 +173,25 @@ FIELDS: dict[str, Check] = {
     "params": table(number),
     "values": table(integer),
     "labels": table(text),
-    "fill": record(kind=word, wall_mm=number, infill=number),  # ranges and further fields: diefab.mass.Fill
+    # ranges (and unknown keys): diefab.mass.Fill
+    "fill": record(
+        kind=word,
+        card_g_m2=number,
+        card_mm=number,
+        tabs=flag,
+        tab_mm=number,
+        glue_g_m2=number,
+        nozzle_mm=number,
+        perimeters=integer,
+        layer_mm=number,
+        top_layers=integer,
+        bottom_layers=integer,
+        infill=number,
+        wall_mm=number,
+        solid_below_mm2=number,
+        skin_margin_mm=number,
+        labels=flag,
+    ),
     "physics": _physics,
     "vertices": array(point, least=4),
     "faces": array(array(index, least=3), least=4),

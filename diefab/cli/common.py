@@ -263,3 +263,79 @@ def run_logged(call, log, live, client, resume: str, on_failure=None):
         log.close()
         if client is not None:
             client.close()
+
+
+#: ``--option`` -> Fill field, for the material settings every command that makes or designs a die takes.
+FILL_OPTIONS = {
+    "card": ("card_g_m2", float, "[paper] Card grammage, g/m² (default 160)."),
+    "card_thickness": ("card_mm", float, "[paper] Card thickness, mm (default grammage / 800)."),
+    "glue": ("glue_g_m2", float, "[paper] Dry glue on every tab, g/m² (default 0)."),
+    "nozzle": ("nozzle_mm", float, "[print] Nozzle diameter, mm (default 0.4)."),
+    "perimeters": ("perimeters", int, "[print] Perimeters (wall lines) (default 2)."),
+    "layer_height": ("layer_mm", float, "[print] Layer height, mm (default 0.2)."),
+    "top_layers": ("top_layers", int, "[print] Solid top layers (default 4)."),
+    "bottom_layers": ("bottom_layers", int, "[print] Solid bottom layers (default 4)."),
+    "infill": ("infill", float, "[print] Infill fraction in [0, 1] (default 0.15)."),
+    "wall": ("wall_mm", float, "[print] Side-wall thickness, mm, instead of perimeters x line spacing."),
+}
+
+
+def fill_options(*groups: str, kind: bool = True):
+    """A decorator adding ``--fill`` (if `kind`) and the settings of the `groups` ("paper", "print")."""
+
+    def decorate(func):
+        for option, (_, typ, text) in reversed(FILL_OPTIONS.items()):
+            if text[1:].split("]")[0] in groups:
+                func = click.option(f"--{option.replace('_', '-')}", option, type=typ, default=None, help=text)(func)
+        if kind:
+            func = click.option(
+                "--fill",
+                "fill_kind",
+                type=click.Choice(["solid", "shell", "paper", "print"]),
+                default=None,
+                help="How the die is made (default: the design's [fill]); the settings below refine it.",
+            )(func)
+        return func
+
+    return decorate
+
+
+def apply_fill(design: Design, fill_kind: str | None = None, **settings) -> Design:
+    """`design` with its fill's kind and the given settings (None: keep) replaced; DesignError if out of range."""
+    from dataclasses import replace
+
+    fill = design.fill
+    changes = {FILL_OPTIONS[k][0]: v for k, v in settings.items() if k in FILL_OPTIONS and v is not None}
+    if fill_kind is None and not changes:
+        return design
+    return replace(design, fill=replace(fill, kind=fill_kind or fill.kind, **changes))
+
+
+def pop_fill(options: dict) -> dict:
+    """Remove the fill options from a command's keyword arguments and return them."""
+    return {k: options.pop(k) for k in ["fill_kind", *FILL_OPTIONS] if k in options}
+
+
+def paper_balance(design: Design, net, spec: str, **card):
+    """The balance of the paper die `net` makes (its own tabs; card settings from options or the design)."""
+    from ..balance import made_balance
+    from ..bodies import net_tab_shapes
+    from ..mass import mass_properties
+
+    base = design if design.fill.kind == "paper" else apply_fill(design, "paper")
+    fill = apply_fill(base, None, **card).fill
+    props = mass_properties(net.poly, fill, mm_per_unit=net.mm_per_unit, tabs=net_tab_shapes(net))
+    center = props.center
+    if design.center_of_mass is not None:  # a stated centre of mass overrides the card's
+        center = design.mass_properties(fill).center
+    words = f"{fill.card_g_m2:g} g/m² card with {len(net.tabs)} glue tabs"
+    return made_balance(design, center, "paper", words, spec)
+
+
+def print_balance(design: Design, solid, fill, spec: str):
+    """The balance of the print of `solid` (walls, skins, infill and engraving as built)."""
+    from ..balance import made_balance
+
+    r = solid.report
+    center = np.asarray(r["center_of_mass_mm"]["printed"]) / r["mm_per_unit"]
+    return made_balance(design, center, "print", fill.describe(), spec)

@@ -4,7 +4,16 @@ from __future__ import annotations
 
 import click
 
-from .common import design_argument, design_inputs, get_design, out_option
+from .common import (
+    design_argument,
+    design_inputs,
+    emit_json,
+    fill_options,
+    get_design,
+    json_option,
+    out_option,
+    paper_balance,
+)
 
 SIZE_HELP = (
     "Die size in mm, as dice makers measure it: face to face for dice whose faces come in parallel pairs "
@@ -27,8 +36,11 @@ SIZE_HELP = (
 @click.option("--mark", type=click.Choice(["bar", "period", "none"]), default="bar", show_default=True,
               help="Mark on a label that reads as another label of the die upside down (6 and 9).")  # fmt: skip
 @click.option("--pips", is_flag=True, help="Draw values 1 to 9 as pips.")
+@fill_options("paper", kind=False)
 @out_option
-def net(design, params, size_mm, page, formats, face_names, tab_width, copies, mark, pips, out_dir) -> None:
+@json_option
+def net(design, params, size_mm, page, formats, face_names, tab_width, copies, mark, pips, out_dir, as_json,
+        **card) -> None:  # fmt: skip
     """Unfolded, labelled, true-scale paper net of DESIGN with glue tabs (SVG/PDF/PNG).
 
     The SVG has Inkscape layers print, score (blue, dashed) and cut (red, one
@@ -53,11 +65,18 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
     written = write_files({paths[k]: rendered[k] for k in kinds}, inputs=inputs)
     if warning:
         click.echo(f"diefab: warning: {warning}", err=True)
-    for path in written:
-        click.echo(str(path))
+    balance = paper_balance(d, the_net, design, **card)
+    if balance.warning:
+        click.echo(f"diefab: warning: {balance.warning}", err=True)
     from ..fabricate.unfold import pack_copies
 
     n_pages = max(n.n_pages for n in pack_copies(the_net, copies))
+    if as_json:
+        emit_json({"files": [str(p) for p in written], "size_mm": size, "pieces": the_net.n_pieces,
+                   "pages": n_pages, "tabs": len(the_net.tabs), **balance.as_json()})  # fmt: skip
+        return
+    for path in written:
+        click.echo(str(path))
     pieces = f"{the_net.n_pieces} piece{'s' * (the_net.n_pieces > 1)}{' each' * (copies > 1)}"
     tabs = f"{len(the_net.tabs)} glue tabs" if the_net.tabs else "no glue tabs"
     dice = f"{copies} dice, " if copies > 1 else ""
@@ -65,3 +84,4 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
         f"{d.name}: {size:g} mm die ({d.size_note}), {dice}{pieces} each, {tabs}, on {n_pages} "
         f"{sheet.name} page{'s' * (n_pages > 1)}\nto read it: {reading_note(d)}"
     )
+    click.echo(balance.summary())

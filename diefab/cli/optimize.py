@@ -11,10 +11,12 @@ import numpy as np
 from ..design import format_value
 from ..files import atomic_write, check_outputs, ensure_dir, output_path, safe_name
 from .common import (
+    apply_fill,
     console,
     design_argument,
     design_inputs,
     emit_json,
+    fill_options,
     free_parameters,
     get_design,
     json_option,
@@ -22,6 +24,7 @@ from .common import (
     out_option,
     physics_file_option,
     physics_settings,
+    pop_fill,
     refuse_options,
     run_logged,
     seed_option,
@@ -56,6 +59,7 @@ from .common import (
 )
 @click.option("--objective", type=click.Choice(["eq2", "tvd", "jsd"]), default="eq2", show_default=True)
 @click.option("--name", default=None, help="Name of the optimized design (default DESIGN-MODEL-opt).")
+@fill_options("paper", "print")
 @simulation_options
 @click.option("--robust", is_flag=True,
               help="[simulation] Minimize the worst objective over the standard throws and tables (the shipped "
@@ -75,14 +79,15 @@ def optimize(ctx, design, params, model, target, seed, min_margin, starts, free,
     from ..design import design_to_toml
     from ..optimize import optimize_design
 
+    fill = pop_fill(sim)
     if model == "simulation":
         return optimize_simulation(ctx, design, params, target, seed, min_margin, starts, free, objective, name,
-                                   robust, physics_profile, out_dir, as_json, **sim)  # fmt: skip
+                                   robust, physics_profile, out_dir, as_json, fill=fill, **sim)  # fmt: skip
     if robust:
         raise click.BadParameter("--robust needs --model simulation (the other models do not simulate)",
                                  param_hint="--robust")  # fmt: skip
     refuse_options(ctx, list(sim), "applies only to --model simulation")
-    d = get_design(design, params, target)
+    d = apply_fill(get_design(design, params, target), **fill)
     if physics_profile is not None:
         physics_settings(d, physics_profile)  # a bad profile is an error whatever the model
         click.echo(f"note: --physics only changes --model simulation; the {model} model does not simulate",
@@ -194,7 +199,7 @@ def _simulation_view(spec, budget_s: float, history):
 
 def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, free, objective, name, robust,
                         physics_profile, out_dir, as_json, sims_per_eval, max_sims_per_eval, budget, resume, method,
-                        start_model, sigma, max_evals, workers, scheduler) -> None:  # fmt: skip
+                        start_model, sigma, max_evals, workers, scheduler, fill=None) -> None:  # fmt: skip
     """``diefab optimize DESIGN --model simulation``: see :mod:`diefab.simopt`."""
     from ..design import design_to_toml
     from ..families import family
@@ -216,7 +221,7 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         raise click.BadParameter(f"{objective!r}: a simulation run minimizes eq2 or tvd", param_hint="--objective")
     if not np.isfinite(min_margin) or min_margin < 0:
         raise click.BadParameter(f"{min_margin} must be a non-negative number", param_hint="--min-margin")
-    d = get_design(design, params, target)
+    d = apply_fill(get_design(design, params, target), **(fill or {}))
     d.check_stable(0.0)
     inputs = design_inputs(design, d)
     warning = None

@@ -5,7 +5,19 @@ from __future__ import annotations
 import click
 
 from ..design import format_value
-from .common import console, design_argument, emit_json, get_design, heading, json_option, note_fast_fill, values_dict
+from .common import (
+    apply_fill,
+    console,
+    design_argument,
+    emit_json,
+    fill_options,
+    get_design,
+    heading,
+    json_option,
+    note_fast_fill,
+    pop_fill,
+    values_dict,
+)
 
 
 @click.command()
@@ -27,20 +39,17 @@ def templates(as_json: bool) -> None:
 @design_argument
 @click.option("--model", default="solid-angle", show_default=True,
               help="Landing model: solid-angle, basins (quasi-static) or fast.")  # fmt: skip
-@click.option(
-    "--fill", type=click.Choice(["solid", "shell", "print"]), default=None, help="Override the design's fill."
-)
+@fill_options("paper", "print")
 @click.option("--target", default=None, help="Override the design's target distribution.")
 @json_option
-def predict(design: str, params, model: str, fill: str | None, target: str | None, as_json: bool) -> None:
+def predict(design: str, params, model: str, target: str | None, as_json: bool, **fill) -> None:
     """Landing probabilities, centre of mass and stability margins of DESIGN."""
-    from dataclasses import replace
 
     from ..models import face_probabilities, to_values
     from ..stats import jsd, pearson_divergence, tvd
 
-    d = get_design(design, params, target)
-    fill_model = replace(d.fill, kind=fill) if fill else d.fill
+    d = apply_fill(get_design(design, params, target), **pop_fill(fill))
+    fill_model = d.fill
     d.check_stable(0.0, fill_model)
     note_fast_fill(d, model, fill_model.kind)
     poly = d.polyhedron

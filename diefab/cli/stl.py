@@ -8,7 +8,17 @@ import click
 
 from ..errors import DiefabError
 from ..files import check_outputs, ensure_dir, output_path, write_files
-from .common import design_argument, design_inputs, emit_json, get_design, json_option, out_option
+from .common import (
+    apply_fill,
+    design_argument,
+    design_inputs,
+    emit_json,
+    fill_options,
+    get_design,
+    json_option,
+    out_option,
+    print_balance,
+)
 from .net import SIZE_HELP
 
 
@@ -56,30 +66,27 @@ from .net import SIZE_HELP
 @click.option("--min-text-height", type=float, default=2.0, show_default=True, help="Smallest text height, mm.")
 @click.option("--margin", "margin_mm", type=float, default=1.0, show_default=True, help="Text to face edge, mm.")
 @click.option("--density", type=float, default=1.24, show_default=True, help="Material density, g/cm³ (PLA).")
-@click.option("--infill", type=float, default=None, help="Infill fraction of the print (default design's or 0.15).")
-@click.option("--wall", "wall_mm", type=float, default=None, help="Wall thickness of the print, mm (default 1.2).")
+@fill_options("print", kind=False)
 @click.option("--fit-each", is_flag=True, help="Size each value label to its face (default: one height for all).")
 @click.option("--preview", is_flag=True, help="Also write DIR/<design>-preview.png.")
 @out_option
 @json_option
 def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face, mark, pips, inlay, formats,
-        min_stroke, min_text_height, margin_mm, density, infill, wall_mm, fit_each, preview, out_dir,
-        as_json) -> None:  # fmt: skip
+        min_stroke, min_text_height, margin_mm, density, fit_each, preview, out_dir, as_json,
+        **settings) -> None:  # fmt: skip
     """Printable STL/3MF of DESIGN with its values engraved; report volume, mass and balance."""
     from ..design import format_value
     from ..errors import FabricationError
     from ..fabricate.labels import reading_note
     from ..fabricate.stl import build_solid, inlay_stl_bytes, stl_bytes, threemf_bytes
-    from ..mass import Fill
 
     kinds = [f.strip().lower() for f in formats.split(",") if f.strip()]
     bad = [f for f in kinds if f not in ("stl", "3mf")]
     if bad or not kinds:
         raise click.BadParameter(f"{formats!r}: formats are stl and 3mf", param_hint="--format")
     d = get_design(design, params)
-    base = d.fill if d.fill.kind == "print" else Fill("print")
     try:
-        fill = Fill("print", base.wall_mm if wall_mm is None else wall_mm, base.infill if infill is None else infill)
+        fill = apply_fill(d, "print", **settings).fill
     except DiefabError as exc:
         raise FabricationError(str(exc)) from exc
     ensure_dir(out_dir)
@@ -105,7 +112,10 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face
     written = [str(p) for p in write_files(payloads, inputs=inputs)]
     for line in solid.warnings:
         click.echo(f"diefab: warning: {line}", err=True)
-    report = {"file": written[0], "files": written, "reading": reading_note(d), **solid.report}
+    balance = print_balance(d, solid, fill, design)
+    if balance.warning:
+        click.echo(f"diefab: warning: {balance.warning}", err=True)
+    report = {"file": written[0], "files": written, "reading": reading_note(d), **solid.report, **balance.as_json()}
     if as_json:
         emit_json(report)
         return
@@ -121,7 +131,7 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face
         f"to read it: {reading_note(d)}\n"
         f"volume {r['volume_mm3']:.1f} mm³ (uncut {r['uncut_volume_mm3']:.1f}, text "
         f"{r['engraved_volume_mm3']:.1f}); watertight {r['watertight']}, bodies {r['bodies']}, genus {r['genus']}\n"
-        f"mass {r['mass_g']:.2f} g printed ({fill.wall_mm:g} mm walls, {fill.infill:.0%} infill), "
+        f"mass {r['mass_g']:.2f} g printed ({fill.wall_thickness_mm:.2f} mm walls, {fill.infill:.0%} infill), "
         f"{r['mass_solid_g']:.2f} g solid, at {density:g} g/cm³\n"
         f"centre of mass shift: {'labels' if r['embossed'] else 'engraving'} {r['com_shift_norm_mm'] * 1000:.1f} µm, "
         f"infill {r['infill_com_shift_norm_mm'] * 1000:.1f} µm"
@@ -132,5 +142,6 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face
     for key in ("sharp", "rounded", "engraved", "printed"):
         if key in r["probabilities"]:
             click.echo(f"{key:<11s} " + " ".join(f"{p:8.5f}" for p in r["probabilities"][key].values()))
+    click.echo(balance.summary())
     for path in written:
         click.echo(f"wrote {path}")

@@ -10,16 +10,19 @@ import numpy as np
 
 from ..design import format_value
 from .common import (
+    apply_fill,
     console,
     design_argument,
     design_inputs,
     emit_json,
+    fill_options,
     get_design,
     heading,
     json_option,
     physics_file_option,
     physics_options,
     physics_settings,
+    pop_fill,
     refuse_options,
     seed_option,
     values_dict,
@@ -34,9 +37,7 @@ from .common import (
 @click.option("--scheduler", default=None, metavar="ADDRESS", help="Run on this Dask scheduler (tcp://host:8786).")
 @click.option("--plot", "plot_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Write a bar chart to FILE (.png or .svg).")  # fmt: skip
-@click.option(
-    "--fill", type=click.Choice(["solid", "shell", "print"]), default=None, help="Override the design's fill."
-)
+@fill_options("paper", "print")
 @click.option("--target", default=None, help="Override the design's target distribution.")
 @click.option("--sensitivity", is_flag=True,
               help="Validate under each standard throw and table (the shipped profiles soft-tray, wooden-table, "
@@ -45,8 +46,8 @@ from .common import (
 @physics_options
 @json_option
 @click.pass_context
-def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, fill, target, sensitivity,
-             physics_profile, as_json, **physics) -> None:  # fmt: skip
+def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, target, sensitivity, physics_profile,
+             as_json, **physics) -> None:  # fmt: skip
     """Drop DESIGN many times in pybullet and test the counts against its target.
 
     With --sensitivity, drop it under each standard throw and table instead
@@ -54,7 +55,6 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, fil
     options override all of them).
     """
     import os
-    from dataclasses import replace
 
     from ..errors import PhysicsError
     from ..files import atomic_write, check_outputs, ensure_dir
@@ -62,11 +62,10 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, fil
     from ..physics import SimulationInterrupted, plot_validation, simulate
     from ..stats import goodness_of_fit
 
+    fill = pop_fill(physics)
     if scheduler is not None:
         refuse_options(ctx, ["workers"], "does not apply with --scheduler (the cluster's workers run the drops)")
-    d = get_design(design, params, target)
-    if fill:
-        d = replace(d, fill=replace(d.fill, kind=fill))
+    d = apply_fill(get_design(design, params, target), **fill)
     settings = physics_settings(d, physics_profile, **physics)
     if sensitivity:
         if plot_file is not None:

@@ -505,7 +505,7 @@ def build_solid(
         Material density (PLA 1.24).
     print_fill : Fill, optional
         Walls and infill of the print; default the design's fill when it is a
-        ``print`` fill, else 1.2 mm walls with 15 % infill.
+        ``print`` fill, else the default print fill.
     batched : bool
         One batched boolean for all labels (see :func:`cut_labels`).
     uniform_height : bool
@@ -688,22 +688,44 @@ def build_solid(
     body_offset = design.mass_properties(Fill("solid")).center * scale - com_sharp
     com_uncut = uncut_first / uncut_volume
     com_solid = first / volume
-    core_inset = max(round_mm, print_fill.wall_mm)
-    core_radius = max(0.0, round_mm - print_fill.wall_mm)
-    core = _rounded(poly, scale, core_inset, core_radius, sharp)
-    if core is None:  # walls meet: the print is solid
-        core_volume, core_first = 0.0, np.zeros(3)
-    else:
-        core_mesh = core.to_mesh64()
-        core_volume, core_first = mesh_moments(np.asarray(core_mesh.vert_properties)[:, :3], core_mesh.tri_verts)
-    if not all(raised) and depth_mm > print_fill.wall_mm and core is not None:
-        warnings.append(
-            f"depth {depth_mm:g} mm exceeds the print's wall {print_fill.wall_mm:g} mm: the slicer adds walls "
-            "around the engraving, so the printed mass and centre of mass are approximate"
+    if round_mm == 0:  # walls, top and bottom skins and infill as the slicer lays them, labels included
+        from ..mass import LabelMass, mass_properties
+
+        label_mass = tuple(
+            LabelMass(
+                poly.face_index(lb.face),
+                lb.area_mm2,
+                lb.centroid_mm,
+                lb.normal,
+                depth_mm,
+                up,
+                lb.outline,
+                lb.origin_mm,
+                lb.baseline,
+                lb.up,
+            )  # fmt: skip
+            for lb, up in zip(labels, raised)
         )
-    hollow = 1 - print_fill.infill
-    print_volume = volume - hollow * core_volume
-    com_print = (first - hollow * core_first) / print_volume
+        printed = mass_properties(poly, print_fill, mm_per_unit=scale, bed=bed_index, labels=label_mass)
+        print_volume, com_print = printed.mass * scale**3, printed.center * scale
+        core = True
+    else:  # rounded: walls of uniform thickness inside the rounded body
+        core_inset = max(round_mm, print_fill.wall_thickness_mm)
+        core_radius = max(0.0, round_mm - print_fill.wall_thickness_mm)
+        core = _rounded(poly, scale, core_inset, core_radius, sharp)
+        if core is None:  # walls meet: the print is solid
+            core_volume, core_first = 0.0, np.zeros(3)
+        else:
+            core_mesh = core.to_mesh64()
+            core_volume, core_first = mesh_moments(np.asarray(core_mesh.vert_properties)[:, :3], core_mesh.tri_verts)
+        hollow = 1 - print_fill.infill
+        print_volume = volume - hollow * core_volume
+        com_print = (first - hollow * core_first) / print_volume
+    if not all(raised) and depth_mm > print_fill.wall_thickness_mm and core is not None:
+        warnings.append(
+            f"depth {depth_mm:g} mm exceeds the print's wall {print_fill.wall_thickness_mm:g} mm: the slicer adds "
+            "walls around the engraving, so the printed mass and centre of mass are approximate"
+        )
     com_uncut, com_solid, com_print = com_uncut + body_offset, com_solid + body_offset, com_print + body_offset
 
     from ..models import solid_angle_model
@@ -752,7 +774,7 @@ def build_solid(
         "genus": genus,
         "triangles": int(len(triangles)),
         "density_g_cm3": float(density_g_cm3),
-        "fill": {"kind": "print", "wall_mm": print_fill.wall_mm, "infill": print_fill.infill},
+        "fill": {**print_fill.to_mapping(), "wall_mm": print_fill.wall_thickness_mm},
         "mass_g": float(print_volume * grams),
         "mass_solid_g": float(volume * grams),
         "center_of_mass_mm": {
