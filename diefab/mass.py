@@ -352,12 +352,10 @@ def inset(poly: Polyhedron, distance: float | np.ndarray) -> Polyhedron | None:
     return _halfspace_body(poly.normals, offsets, float(np.ptp(poly.vertices, axis=0).max()))
 
 
-def _halfspace_body(normals: np.ndarray, offsets: np.ndarray, size: float) -> Polyhedron | None:
-    """The convex body {x : normals @ x <= offsets}, or None if it is empty or flat."""
+def _deepest_point(normals: np.ndarray, offsets: np.ndarray, size: float) -> np.ndarray | None:
+    """(3,) float: the Chebyshev centre of {x : normals @ x <= offsets}, or None if the body is empty or flat."""
     from scipy.optimize import linprog
-    from scipy.spatial import HalfspaceIntersection, QhullError
 
-    # Chebyshev centre: the point deepest inside the half-spaces
     res = linprog(
         c=[0, 0, 0, -1],
         A_ub=np.column_stack([normals, np.ones(len(normals))]),
@@ -367,8 +365,18 @@ def _halfspace_body(normals: np.ndarray, offsets: np.ndarray, size: float) -> Po
     )
     if not res.success or res.x[3] <= tol.LENGTH * max(1.0, size):
         return None
+    return res.x[:3]
+
+
+def _halfspace_body(normals: np.ndarray, offsets: np.ndarray, size: float) -> Polyhedron | None:
+    """The convex body {x : normals @ x <= offsets}, or None if it is empty or flat."""
+    from scipy.spatial import HalfspaceIntersection, QhullError
+
+    inside = _deepest_point(normals, offsets, size)
+    if inside is None:
+        return None
     try:
-        hs = HalfspaceIntersection(np.column_stack([normals, -offsets]), res.x[:3])
+        hs = HalfspaceIntersection(np.column_stack([normals, -offsets]), inside)
     except QhullError:
         return None
     try:
@@ -410,21 +418,13 @@ class _Hull:
 
 def _halfspace_hull(normals: np.ndarray, offsets: np.ndarray, size: float, guess: np.ndarray) -> _Hull | None:
     """:func:`_halfspace_body` as a :class:`_Hull` (no face merging: fast); `guess` may be an interior point."""
-    from scipy.optimize import linprog
     from scipy.spatial import HalfspaceIntersection, QhullError
 
     inside = guess
     if np.min(offsets - normals @ guess) <= 1e-3 * size:  # not well inside: the deepest point
-        res = linprog(
-            c=[0, 0, 0, -1],
-            A_ub=np.column_stack([normals, np.ones(len(normals))]),
-            b_ub=offsets,
-            bounds=[(None, None)] * 3 + [(0, None)],
-            method="highs",
-        )
-        if not res.success or res.x[3] <= tol.LENGTH * max(1.0, size):
+        inside = _deepest_point(normals, offsets, size)
+        if inside is None:
             return None
-        inside = res.x[:3]
     try:
         hs = HalfspaceIntersection(np.column_stack([normals, -offsets]), inside)
     except QhullError:
