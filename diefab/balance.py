@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .design import Design
+from .design import Design, format_value
 from .stats import tvd
 
 __all__ = ["TVD_SLACK", "Balance", "made_balance"]
@@ -86,7 +86,8 @@ class Balance:
 
     def summary(self) -> str:
         """Two lines: the predicted distribution and the TVDs, labelled with the model."""
-        values = " ".join(f"{k}:{p:.4f}" for k, p in self.predicted.items())
+        signed = min(int(k) for k in self.predicted) < 0
+        values = " ".join(f"{format_value(int(k), signed)}:{p:.4f}" for k, p in self.predicted.items())
         return (
             f"as made ({self.settings}), {self.model} model: {values}\n"
             f"TVD to target {self.predicted_tvd:.4f} as made, {self.design_tvd:.4f} as designed "
