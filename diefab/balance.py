@@ -111,11 +111,13 @@ def made_balance(design: Design, center: np.ndarray, material: str, settings: st
         How the user named the design (template name or path), for the command.
     """
     from .models import MODELS, to_values
+    from .optimize import stated_inertia
 
     poly = design.polyhedron
     goal = design.target_distribution.aligned(design.support)
-    made = to_values(design, MODELS[MODEL](poly, np.asarray(center, dtype=float)))
-    own = to_values(design, MODELS[MODEL](poly, design.mass_properties().center))
+    inertia = stated_inertia(design)
+    made = to_values(design, MODELS[MODEL](poly, np.asarray(center, dtype=float), inertia=inertia))
+    own = to_values(design, MODELS[MODEL](poly, design.mass_properties().center, inertia=inertia))
     command = f"diefab optimize {spec or design.name} --fill {material} --model simulation"
     return Balance(
         model=MODEL,

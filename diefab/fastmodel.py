@@ -165,25 +165,27 @@ def tipping_barriers(poly: Polyhedron, center: np.ndarray) -> tuple[np.ndarray, 
     return barrier, share, _neighbors(poly)
 
 
-def roll_retention(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
+def roll_retention(poly: Polyhedron, center: np.ndarray, inertia: np.ndarray | None = None) -> np.ndarray:
     """(r,) float in [0, 1]: per directed edge, the kinetic-energy share a die keeps rolling over it.
 
     ``((k**2 + r**2 cos phi) / (k**2 + r**2)) ** 2`` (clipped at 0), with
     ``phi`` the angle between the normals of the edge's two faces, ``r`` the
     distance from ``center`` to the edge line and ``k**2`` the moment of
     inertia of the uniform solid about the axis through ``center`` parallel
-    to the edge, over its volume.  The same on both sides of an edge.
+    to the edge, over its volume -- or of `inertia`, a stated inertia tensor
+    per unit mass about ``center``.  The same on both sides of an edge.
     """
     from .mass import mass_properties
 
     center = np.asarray(center, dtype=float)
     tail, head, face, _ = poly._ring
-    props = mass_properties(poly)
-    shift = center - props.center  # parallel-axis theorem: inertia about `center`
-    inertia = props.inertia + props.mass * (shift @ shift * np.eye(3) - np.outer(shift, shift))
+    if inertia is None:
+        props = mass_properties(poly)
+        shift = center - props.center  # parallel-axis theorem: inertia about `center`
+        inertia = (props.inertia + props.mass * (shift @ shift * np.eye(3) - np.outer(shift, shift))) / props.mass
     edge = poly.vertices[head] - poly.vertices[tail]
     edge /= np.linalg.norm(edge, axis=1)[:, None]
-    k2 = np.einsum("ij,jk,ik->i", edge, inertia, edge) / props.mass
+    k2 = np.einsum("ij,jk,ik->i", edge, np.asarray(inertia, dtype=float), edge)
     r2 = np.sum(np.cross(center - poly.vertices[tail], edge) ** 2, axis=1)
     cos = np.einsum("ij,ij->i", poly.normals[face], poly.normals[_neighbors(poly)])
     return np.clip((k2 + r2 * cos) / (k2 + r2), 0, None) ** 2
@@ -216,6 +218,7 @@ def landing_probabilities(
     area_power: float = AREA_POWER,
     roll_power: float = ROLL_POWER,
     height_weight: float = HEIGHT_WEIGHT,
+    inertia: np.ndarray | None = None,
 ) -> np.ndarray:
     """(m,) float: probability of coming to rest on each face (see the module docstring).
 
@@ -235,6 +238,9 @@ def landing_probabilities(
     height_weight : float
         Per model unit: the result is weighted by ``exp(-height_weight * h)``,
         h the height of the centre of mass resting on the face.
+    inertia : (3, 3) float, optional
+        A stated inertia tensor per unit mass about `center`, model units²
+        (default: the uniform solid's, see :func:`roll_retention`).
     """
     m = len(poly.faces)
     omega = solid_angles(poly, center)
@@ -251,7 +257,7 @@ def landing_probabilities(
     rate = np.clip(share[ok], 0, None) * np.exp(-np.clip(barrier[ok], 0, None) / temperature)
     rate *= (poly.areas[dest] / poly.areas[face[ok]]) ** area_power
     if roll_power:
-        rate *= np.maximum(roll_retention(poly, center)[ok], _TINY) ** roll_power
+        rate *= np.maximum(roll_retention(poly, center, inertia)[ok], _TINY) ** roll_power
     q = np.zeros((m, m))
     np.add.at(q, (face[ok], dest), rate)
     np.fill_diagonal(q, 0.0)
@@ -284,7 +290,7 @@ def _evolve(p0: np.ndarray, generator: np.ndarray) -> np.ndarray:
     return out
 
 
-def fast_model(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
+def fast_model(poly: Polyhedron, center: np.ndarray, inertia: np.ndarray | None = None) -> np.ndarray:
     """(m,) float: the calibrated fast model (``MODELS["fast"]``).
 
     The chain model (:func:`landing_probabilities`) for every die; for a gem
@@ -292,9 +298,10 @@ def fast_model(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
     discrepancy (:func:`gem_discrepancy`).  A gem is recognized by
     :func:`~diefab.families.gem_parameters`: built by the gem family, not the
     same shape given as a ``convex`` or ``mesh`` design, which gets the chain
-    alone.
+    alone.  A stated `inertia` (per unit mass about `center`) replaces the
+    uniform solid's in the chain's rolling term.
     """
-    p = landing_probabilities(poly, center)
+    p = landing_probabilities(poly, center, inertia=inertia)
     params = gem_parameters(poly)
     if params is None:
         return p

@@ -37,11 +37,13 @@ __all__ = [
     "value_probabilities",
 ]
 
-Model = Callable[[Polyhedron, np.ndarray], np.ndarray]
+#: ``model(poly, center, inertia=None)``: `inertia` is a stated inertia tensor per unit mass about `center`
+#: (model units squared), None for the body's own.
+Model = Callable[..., np.ndarray]
 
 
-def solid_angle_model(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
-    """(m,) float: solid angle of each face at `center` over 4 pi.
+def solid_angle_model(poly: Polyhedron, center: np.ndarray, inertia: np.ndarray | None = None) -> np.ndarray:
+    """(m,) float: solid angle of each face at `center` over 4 pi (`inertia` plays no part).
 
     The die first touches down on the face the downward ray from the centre
     of mass meets.  If that face is transitional it tips off it and rolls
@@ -69,8 +71,9 @@ def basin_shares(poly: Polyhedron, center: np.ndarray) -> tuple[np.ndarray, floa
     return RestBasins.of(poly, center).shares()
 
 
-def basins_model(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
-    """(m,) float: :func:`basin_shares` without the bound (``MODELS["basins"]``)."""
+def basins_model(poly: Polyhedron, center: np.ndarray, inertia: np.ndarray | None = None) -> np.ndarray:
+    """(m,) float: :func:`basin_shares` without the bound (``MODELS["basins"]``; quasi-static, so `inertia`
+    plays no part)."""
     return basin_shares(poly, center)[0]
 
 
@@ -88,8 +91,10 @@ def _model(name: str) -> Model:
 
 def face_probabilities(design: Design, model: str = "solid-angle", fill: Fill | None = None) -> np.ndarray:
     """(m,) float: probability of resting on each face, in face order."""
+    from .optimize import stated_inertia
+
     poly = design.polyhedron
-    return _model(model)(poly, design.mass_properties(fill).center)
+    return _model(model)(poly, design.mass_properties(fill).center, inertia=stated_inertia(design))
 
 
 def to_values(design: Design, face_probs: np.ndarray) -> np.ndarray:
