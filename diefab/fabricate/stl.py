@@ -95,6 +95,8 @@ ROUND_SEGMENTS = 32
 THIN_AREA_WARNING = 0.1
 #: Gap kept between a value read at a corner or edge and the face's centred label, mm.
 MARK_CLEARANCE_MM = 0.6
+#: A value read at a corner or edge with less room than this (mm high) is left out, with a warning.
+MIN_MARK_MM = 0.8
 
 
 @dataclass(frozen=True, eq=False)
@@ -440,12 +442,13 @@ def _place_label(
     )
 
 
-def _place_mark(poly, m, flat, axis, font, texts, mark, pips, margin_mm, min_height_mm, min_stroke_mm, scale) -> Label:
+def _place_mark(poly, m, flat, axis, font, texts, mark, pips, margin_mm, min_stroke_mm, scale) -> Label | None:
     """A value read at a corner or along an edge (:class:`~diefab.readings.Marking` `m`) on its face, as a Label.
 
     The text lies in the face shrunk toward that corner or the edge's middle
     (:func:`~.labels.mark_frame`), its top toward it, at most
-    :data:`~.labels.MARK_FRACTION` of the face's inscribed diameter high.
+    :data:`~.labels.MARK_FRACTION` of the face's inscribed diameter high;
+    None where less than :data:`MIN_MARK_MM` fits.
     """
     from shapely import affinity
     from shapely.geometry import Polygon
@@ -467,12 +470,8 @@ def _place_mark(poly, m, flat, axis, font, texts, mark, pips, margin_mm, min_hei
     glyphs = label_shape(m.text, font, others=texts.values(), mark=mark, pips=pips)
     cap = MARK_FRACTION * 2 * face2d.exterior.distance(polylabel(face2d, 0.01))
     height, cx, cy = fit_label(affinity.affine_transform(region, to_text), glyphs, cap)
-    if height < min_height_mm:
-        raise FabricationError(
-            f"value {m.text!r}, read at {'a corner' if len(m.at) == 1 else 'an edge'}, does not fit on face "
-            f"{m.face}: at most {height:.2f} mm high, below the minimum text height {min_height_mm:g} mm "
-            "(use a larger --size)"
-        )
+    if height < MIN_MARK_MM:
+        return None
     outline = affinity.translate(affinity.scale(glyphs, height, height, origin=(0, 0)), cx, cy)
     baseline, up = xa[0] * u + xa[1] * v, ya[0] * u + ya[1] * v
     at_mm = origin + anchor[0] * u + anchor[1] * v
@@ -549,6 +548,7 @@ def build_solid(
     uniform_height: bool = True,
     mark: str = "bar",
     pips: bool = False,
+    with_marks: bool = True,
 ) -> Solid:
     """The printable die: hull (rounded if asked), labels engraved or embossed, checked and measured.
 
@@ -594,6 +594,10 @@ def build_solid(
         marked (a 6 on a die that also has a 9).
     pips : bool
         Show value labels 1 to 9 as pips.
+    with_marks : bool
+        Also engrave the values read at a corner or along an edge
+        (:func:`~.labels.placed_marks`, e.g. the gem's apex), in that corner
+        or along that edge of every face that holds it.
 
     Returns
     -------
@@ -684,11 +688,20 @@ def build_solid(
     texts = design.label_of
     shapes = {face: label_shape(t, font, others=texts.values(), mark=mark, pips=pips) for face, t in texts.items()}
 
-    marks = [
-        _place_mark(poly, m, flat, axis, font, texts, mark, pips, margin_mm + depth_mm * cots[poly.face_index(m.face)],
-                    min_text_height_mm, min_stroke_mm, scale)
-        for m in placed_marks(design)
-    ]  # fmt: skip
+    marks, placed = [], []
+    for m in placed_marks(design) if with_marks else []:
+        label = _place_mark(poly, m, flat, axis, font, texts, mark, pips,
+                            margin_mm + depth_mm * cots[poly.face_index(m.face)], min_stroke_mm, scale)  # fmt: skip
+        where = f"value {m.text!r} at {'its corner' if len(m.at) == 1 else 'its edge'} of face {m.face}"
+        if label is None:
+            warnings.append(f"{where} does not fit and is not engraved: use a larger --size")
+            continue
+        if label.height_mm < min_text_height_mm:
+            warnings.append(
+                f"{where} is {label.height_mm:.2f} mm high, under the minimum text height {min_text_height_mm:g} mm"
+            )
+        marks.append(label)
+        placed.append(m)
     avoid: dict[str, Any] = {}
     for label in marks:
         keep_clear = label.face_outline.buffer(MARK_CLEARANCE_MM)
@@ -885,9 +898,15 @@ def build_solid(
             for label in fitted.values()
         },
         "marks": [
-            {"face": label.face, "text": label.text, "at": [int(v) for v in m.at], "height_mm": label.height_mm,
-             "center_mm": label.center_mm.tolist(), "up": label.up.tolist()}
-            for label, m in zip(marks, placed_marks(design))
+            {
+                "face": label.face,
+                "text": label.text,
+                "at": [int(v) for v in m.at],
+                "height_mm": label.height_mm,
+                "center_mm": label.center_mm.tolist(),
+                "up": label.up.tolist(),
+            }
+            for label, m in zip(marks, placed)
         ],  # fmt: skip
         "landing_model": "solid-angle" if round_mm == 0 else "solid-angle of the flat faces",
         "probabilities": predictions,
@@ -904,8 +923,8 @@ def build_solid(
             poly.names[k]: 0.0 if ring is None else _ring_area(ring) for k, ring in enumerate(flat)
         }
     report["bed_face"] = bed_name
-    report["embossed"] = [label.face for label, up in zip(labels, raised) if up]
-    report["engraved"] = [label.face for label, up in zip(labels, raised) if not up]
+    report["embossed"] = list(dict.fromkeys(label.face for label, up in zip(labels, raised) if up))
+    report["engraved"] = list(dict.fromkeys(label.face for label, up in zip(labels, raised) if not up))
     return Solid(
         design, vertices, triangles, label_tri, tuple(labels), report, tuple(warnings),
         _rotation_to_down(poly.normals[bed_index]), _mesh_arrays(base), inlay,
