@@ -1,0 +1,78 @@
+"""A die of hundreds of faces through the command line: predict, validate, net and stl, timed.
+
+The die is a rounded cube (the corners' spheres' hull: 6 faces it rests on,
+the rest transitional), 142, 310 or 542 faces.  Each command runs as a
+subprocess; wall time and the CPU time of the process and its children are
+printed, with the net's pieces and the face count.
+
+Run: nice -n 10 python benchmarks/bench_many_faces.py [--counts 8,16] [--sims 200]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+
+from test_transitional import _rounded_cube  # noqa: E402
+
+from diefab.design import design_to_toml  # noqa: E402
+
+
+def timed(*args: str) -> tuple[dict, float, float]:
+    """Run ``diefab ARGS --json``: its JSON, wall seconds and CPU seconds (children included)."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "diefab", *args, "--json"], capture_output=True, text=True)
+    wall = time.perf_counter() - t
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if proc.returncode != 0:
+        raise SystemExit(f"diefab {' '.join(args)} failed: {proc.stderr.strip()}")
+    cpu = after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
+    return json.loads(proc.stdout), wall, cpu
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--counts", default="16", help="uv-sphere segment counts (8: 142 faces, 16: 542).")
+    parser.add_argument("--sims", type=int, default=200, help="Drops for validate.")
+    args = parser.parse_args()
+    print(f"{'faces':>5} {'command':<22} {'wall s':>8} {'cpu s':>8}  result")
+    with tempfile.TemporaryDirectory() as tmp:
+        for count in (int(c) for c in args.counts.split(",")):
+            design = _rounded_cube(count)
+            faces = len(design.polyhedron.faces)
+            path = Path(tmp) / f"rounded{count}.toml"
+            path.write_text(design_to_toml(design))
+            runs = {
+                "predict solid-angle": ("predict", str(path), "--model", "solid-angle"),
+                "predict basins": ("predict", str(path), "--model", "basins"),
+                "predict fast": ("predict", str(path), "--model", "fast"),
+                f"validate {args.sims} drops": ("validate", str(path), "--sims", str(args.sims), "--workers", "1"),
+                "net": ("net", str(path), "--out", tmp, "--format", "svg"),
+                "stl": ("stl", str(path), "--out", tmp),
+            }
+            for what, argv in runs.items():
+                data, wall, cpu = timed(*argv)
+                if what == "net":
+                    result = f"{data['pieces']} pieces, {data['tabs']} tabs, {data['pages']} page(s)"
+                elif what == "stl":
+                    result = f"watertight {data.get('watertight')}, {data.get('volume_mm3', 0):.0f} mm3"
+                elif what.startswith("validate"):
+                    result = f"{data['landed']} landed, TVD {data.get('tvd', float('nan')):.3f}"
+                else:
+                    result = " ".join(f"{v:.3f}" for v in data["values"].values())
+                print(f"{faces:>5} {what:<22} {wall:>8.1f} {cpu:>8.1f}  {result}", flush=True)
+    print(f"{os.cpu_count()} cores (shared machine)")
+
+
+if __name__ == "__main__":
+    main()
