@@ -71,3 +71,11 @@ def test_stl_is_sound(big):
     solid = build_solid(design)
     assert solid.report["watertight"] and solid.report["bodies"] == 1 and solid.report["genus"] == 0
     assert sorted(solid.report["labels"].values()) == ["1", "2", "3", "4", "5", "6"]
+
+
+def test_net_command_writes_the_net(big, run, tmp_path):
+    _, path = big
+    code, out, err = run("net", path, "--tab-width", "0", "--format", "svg", "--out", tmp_path, "--json")
+    assert code == 0, err
+    data = json.loads(out)
+    assert data["pieces"] >= 1 and (tmp_path / "rounded-net.svg").is_file()
