@@ -74,7 +74,13 @@ def test_stl_is_sound(big):
 
 
 def test_net_command_writes_the_net(big, run, tmp_path):
-    _, path = big
+    from dataclasses import replace
+
+    from diefab.mass import Fill
+
+    design, _ = big
+    path = tmp_path / "rounded.toml"  # glued edge to edge: 5 mm tabs would weigh enough to tip it onto f145
+    path.write_text(design_to_toml(replace(design, fill=Fill("paper", tabs=False))))
     code, out, err = run("net", path, "--tab-width", "0", "--format", "svg", "--out", tmp_path, "--json")
     assert code == 0, err
     data = json.loads(out)
