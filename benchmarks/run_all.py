@@ -26,6 +26,8 @@ BENCHMARKS = {
     "bench_simopt.py": ([], ["--budget", "1", "--validate", "3000"]),
     "bench_calibrate.py": ([], ["--drops", "200", "--candidates", "3", "--cache", "/dev/null"]),
     "bench_realrolls.py": ([], ["--sims", "200"]),
+    "bench_basins.py": ([], []),
+    "bench_many_faces.py": ([], ["--sims", "40"]),
 }
 
 
