@@ -31,7 +31,7 @@ from .errors import DesignError
 from .families import family as get_family
 from .geometry import resting_faces
 from .mass import Fill, mass_properties
-from .models import MODELS
+from .models import MODELS, model_probabilities
 from .optimize import INFEASIBLE, optimize_design
 from .stats import tvd
 from .targets import Target
@@ -172,7 +172,8 @@ def _start(candidate: Candidate, target: Target, name: str, fill: Fill, size_mm:
     prism's caps), unless that leaves fewer faces than values.
     """
     poly = candidate.polyhedron()
-    center = mass_properties(poly, fill).center
+    # the values are assigned from the solid's balance: a made fill's needs the die's size, set below
+    center = mass_properties(poly).center
     resting = resting_faces(poly, center)
     if resting.sum() < len(target.values):  # too few: every face gets a value, the optimizer makes them rest
         resting[:] = True
@@ -303,8 +304,8 @@ def _refine(out: Synthesis, target: Target, deadline: float, seed: int, min_marg
             out.design, out.objective, out.predicted = design, objective, predicted
         if distance < REFINE_GOAL or time.monotonic() > deadline:
             break
-        center = design.mass_properties().center
-        correction = sim.face_probabilities - MODELS[RANK_MODEL](design.polyhedron, center)
+        body = design.mass_properties()
+        correction = sim.face_probabilities - model_probabilities(RANK_MODEL, design.polyhedron, body, design.fill)
         try:
             # leave time for the next simulation, which judges this step
             stop = max(time.monotonic() + MIN_STEP_SECONDS, deadline - per_drop * REFINE_DROPS)
