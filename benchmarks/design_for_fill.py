@@ -5,7 +5,8 @@ Run:  python benchmarks/design_for_fill.py --fill paper|print [--rounds 3] [--dr
 Starts from the fast model's optimum for the fill (``diefab optimize
 fudge-gem-sim --fill FILL --model fast``) and repeats: drop the current die
 in pybullet with its fill (`--drops`, a new physics seed every round; the
-counts are appended to ``OUT/fudge-gem-FILL-rounds.jsonl``),
+counts are appended to ``OUT/fudge-gem-FILL-rounds.jsonl``, and the
+correction pools every simulation of that very die kept there),
 take the simulated face frequencies minus the fast model's probabilities
 (averaged over mirror-image faces) as a fixed correction, and re-fit the
 parameters to 4dF under the fast model plus that correction, from the
@@ -82,10 +83,14 @@ def main() -> None:
             f.write(json.dumps({"fill": design.fill.to_mapping(), "params": dict(design.params), "drops": args.drops,
                                 "seed": args.seed + k, "face_counts": result.face_counts.tolist(),
                                 "cocked": result.cocked, "unsettled": result.unsettled}) + "\n")  # fmt: skip
-        q = counts / counts.sum()
+        # the correction pools every simulation of this very die in this fill kept in the file (earlier runs too)
+        same = [r for r in map(json.loads, rounds_file.read_text(encoding="utf-8").splitlines())
+                if r["params"] == dict(design.params) and r["fill"] == design.fill.to_mapping()]  # fmt: skip
+        pooled = np.sum([r["face_counts"] for r in same], axis=0, dtype=float)
+        q = pooled / pooled.sum()
         body = design.mass_properties()
         p = fast_model(design.polyhedron, body.center, fill=design.fill, inertia=body.inertia / body.mass)
-        sim_tvd = tvd(to_values(design, q), goal)
+        sim_tvd = tvd(to_values(design, counts / counts.sum()), goal)  # this round's drops alone
         if unreadable(design.polyhedron, design.values, tuple(design.labels), read_by) is None:
             history.append((dict(design.params), sim_tvd))  # only a die that reads as made can be the answer
         print(f"round {k + 1}: simulated TVD {sim_tvd:.4f} ({args.drops} drops, seed {args.seed + k}); "

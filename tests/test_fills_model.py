@@ -144,3 +144,16 @@ def test_chain_uses_the_inertia_it_is_given():
     assert not np.allclose(with_shell, solid_inertia)
     for p in (with_shell, solid_inertia):
         assert p.sum() == pytest.approx(1.0)
+
+
+def test_the_optimizer_scores_a_card_die_with_the_fill_aware_model():
+    from diefab.models import to_values
+
+    d = replace(load_design("fudge-gem-sim"), fill=Fill("shell"))
+    problem = Problem(d, ("a", "b", "c", "d", "e"), model="fast", objective="tvd")
+    _, values, _ = problem.evaluate(dict(d.params))
+    body = d.mass_properties()
+    expected = to_values(d, model_probabilities("fast", d.polyhedron, body, d.fill))
+    assert np.allclose(values, expected, atol=1e-12)
+    solid_trained = to_values(d, fast_model(d.polyhedron, body.center))
+    assert not np.allclose(values, solid_trained, atol=1e-4)
