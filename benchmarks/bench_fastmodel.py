@@ -375,6 +375,9 @@ def main(argv=None) -> None:
         fit = learn(training, args.train_drops, args.seed, args.train_seed)
         print(f"learned from {len(train)} {args.train_fill} training designs x {args.train_drops} drops: {fit}")
 
+    if not test:  # --designs 0: learning (or calibrating) only
+        return
+
     def chain(poly, center, *, fill=None, inertia=None):
         return fastmodel.landing_probabilities(poly, center, inertia=inertia, **constants)
 
