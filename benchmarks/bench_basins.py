@@ -53,7 +53,7 @@ def main() -> None:
     params = dict(gem.params)
     t_exact, _ = best_of(lambda: problem.evaluate(params))
     exact_model = models.MODELS["basins"]
-    models.MODELS["basins"] = lambda poly, center, inertia=None: RestBasins.of(poly, center).shares()[0]
+    models.MODELS["basins"] = lambda poly, center: RestBasins.of(poly, center).shares()[0]
     try:
         t_grid, _ = best_of(lambda: problem.evaluate(params))
     finally:

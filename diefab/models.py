@@ -25,25 +25,25 @@ import numpy as np
 from .design import Design
 from .errors import DesignError
 from .geometry import Polyhedron, RestBasins, resting_faces, solid_angles
-from .mass import Fill
+from .mass import Fill, MassProperties
 
 __all__ = [
+    "FILL_MODELS",
     "MODELS",
     "basin_shares",
     "basins_model",
     "face_probabilities",
+    "model_probabilities",
     "solid_angle_model",
     "to_values",
     "value_probabilities",
 ]
 
-#: ``model(poly, center, inertia=None)``: `inertia` is a stated inertia tensor per unit mass about `center`
-#: (model units squared), None for the body's own.
-Model = Callable[..., np.ndarray]
+Model = Callable[[Polyhedron, np.ndarray], np.ndarray]
 
 
-def solid_angle_model(poly: Polyhedron, center: np.ndarray, inertia: np.ndarray | None = None) -> np.ndarray:
-    """(m,) float: solid angle of each face at `center` over 4 pi (`inertia` plays no part).
+def solid_angle_model(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
+    """(m,) float: solid angle of each face at `center` over 4 pi.
 
     The die first touches down on the face the downward ray from the centre
     of mass meets.  If that face is transitional it tips off it and rolls
@@ -72,15 +72,16 @@ def basin_shares(poly: Polyhedron, center: np.ndarray) -> tuple[np.ndarray, floa
     return RestBasins.of(poly, center).exact_shares()
 
 
-def basins_model(poly: Polyhedron, center: np.ndarray, inertia: np.ndarray | None = None) -> np.ndarray:
-    """(m,) float: :func:`basin_shares` without the bound (``MODELS["basins"]``; quasi-static, so `inertia`
-    plays no part)."""
+def basins_model(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
+    """(m,) float: :func:`basin_shares` without the bound (``MODELS["basins"]``)."""
     return basin_shares(poly, center)[0]
 
 
 from .fastmodel import fast_model  # noqa: E402 -- calibrated against pybullet
 
 MODELS: dict[str, Model] = {"solid-angle": solid_angle_model, "fast": fast_model, "basins": basins_model}
+#: Models that take the fill and the body's inertia (keywords ``fill`` and ``inertia``) as well.
+FILL_MODELS = {"fast"}
 
 
 def _model(name: str) -> Model:
@@ -90,12 +91,21 @@ def _model(name: str) -> Model:
         raise DesignError(f"unknown model {name!r} (models: {', '.join(MODELS)})") from None
 
 
+def model_probabilities(name: str, poly: Polyhedron, body: MassProperties, fill: Fill | None = None) -> np.ndarray:
+    """(m,) float: model `name` at a die made of `fill` whose mass properties are `body`.
+
+    Models in :data:`FILL_MODELS` are given the fill and the inertia as
+    well; the others see the centre of mass alone.
+    """
+    fn = _model(name)
+    if name in FILL_MODELS:
+        return fn(poly, body.center, fill=fill, inertia=body.inertia / body.mass)
+    return fn(poly, body.center)
+
+
 def face_probabilities(design: Design, model: str = "solid-angle", fill: Fill | None = None) -> np.ndarray:
     """(m,) float: probability of resting on each face, in face order."""
-    from .optimize import stated_inertia
-
-    poly = design.polyhedron
-    return _model(model)(poly, design.mass_properties(fill).center, inertia=stated_inertia(design))
+    return model_probabilities(model, design.polyhedron, design.mass_properties(fill), fill or design.fill)
 
 
 def to_values(design: Design, face_probs: np.ndarray) -> np.ndarray:
