@@ -12,8 +12,22 @@ from diefab.fabricate.net import design_net
 from diefab.fabricate.sheet import _die_texts
 from diefab.fabricate.text import load_font
 
-#: The paper gem reads +4 and -4 from an edge and 0 from its apex; the plain gem 0 from its apex.
-DESIGNS = ("fudge-gem-paper", "fudge-gem")
+#: A gem that reads +4 and -4 from an edge and 0 from its apex; the plain gem 0 from its apex.
+EDGE_GEM = dict(
+    params={"a": 1.096142057017725, "b": 0.6992907133500326, "c": 0.7971155905815607, "d": 1.1880515442696602,
+            "e": 0.8939678614309613},
+    values={"f1": 3, "f2": 4, "f3": -3, "f4": -4, "f5": 0, "f6": 1, "f7": 2, "f8": -1, "f9": -2},
+    labels={"f5": "4dF"},
+)  # fmt: skip
+DESIGNS = ("edge-gem", "fudge-gem")
+
+
+def _design(name: str):
+    if name == "edge-gem":
+        from diefab.design import Design
+
+        return Design("edge-gem", "gem", **EDGE_GEM)
+    return load_design(name)
 
 
 def _nearest_place(ring: np.ndarray, ids: list[int], point: np.ndarray, edge: bool) -> tuple[int, ...]:
@@ -27,9 +41,10 @@ def _nearest_place(ring: np.ndarray, ids: list[int], point: np.ndarray, edge: bo
 
 @pytest.mark.parametrize("name", DESIGNS)
 def test_every_marking_is_printed_on_the_net_at_its_corner_or_edge(name):
-    design = load_design(name)
+    design = _design(name)
     marks = placed_marks(design)
     assert marks, "the gem is read at its apex"
+    assert any(len(m.at) == 2 for m in marks) == (name == "edge-gem")
     net = design_net(design)
     fonts = {"font": load_font(bold=False), "bold": load_font()}
     texts = _die_texts(net, design.label_of, design_axis(design), face_names=False, mark="bar", pips=False,
@@ -53,7 +68,7 @@ def test_every_marking_is_printed_on_the_net_at_its_corner_or_edge(name):
 def test_every_marking_is_engraved_at_its_corner_or_edge(name):
     from diefab.fabricate.stl import build_solid
 
-    design = load_design(name)
+    design = _design(name)
     marks = placed_marks(design)
     solid = build_solid(design, size_mm=30.0)
     scale = design.mm_per_unit
