@@ -1,6 +1,6 @@
 """Leave-one-die-out prediction of real dice: default physics, calibrated physics, models, the source's own.
 
-    nice -n 10 python benchmarks/bench_calibrate.py --workers 1          # the full run (see the README for its time)
+    nice -n 10 python benchmarks/bench_calibrate.py --workers 1    # the full run (about 20 minutes, 2 shared cores)
     python benchmarks/bench_calibrate.py --drops 200 --candidates 3 --slow-drops 60 --predict-drops 200  # a quick one
 
 The dice: the paper's die as made (the gem a=1.18 b=0.52 c=0.72 d=1.41 as
@@ -166,7 +166,7 @@ def main() -> int:
     parser.add_argument("--candidates", type=int, default=16, help="Sobol candidates besides the defaults")
     parser.add_argument("--prior", type=float, default=0.25,
                         help="prior sd toward the defaults, in parameter ranges (inf: none)")  # fmt: skip
-    parser.add_argument("--predict-drops", type=int, default=500, help="fresh drops of each prediction")
+    parser.add_argument("--predict-drops", type=int, default=2000, help="fresh drops of each prediction")
     parser.add_argument("--seed", type=int, default=0, help="physics seed of the candidates (common random numbers)")
     parser.add_argument("--predict-seed", type=int, default=1, help="physics seed of the predictions")
     parser.add_argument("--workers", type=int, default=1)
@@ -276,9 +276,11 @@ def main() -> int:
         means[label] = {c: mean(c, which) for c in cols}
         print(f"{label:<20}" + "".join(f"{'-':>12}" if v is None else f"{v:12.4f}" for v in means[label].values()))
     wins = {ref: sum(r["loo"] < r[ref] for r in rows if r[ref] is not None) for ref in ("default", "ours", "bullet")}
-    print(f"\nleave-one-out calibrated beats: default physics on {wins['default']} of {len(rows)} dice, `ours` on "
-          f"{wins['ours']} of {len(groups['mean, the real-rolls dice'])}, `bullet` on {wins['bullet']}; "
-          f"within 1.5x sampling noise on {sum(r['loo'] <= 1.5 * r['noise'] for r in rows)} of {len(rows)}")
+    print(
+        f"\nleave-one-out calibrated beats: default physics on {wins['default']} of {len(rows)} dice, `ours` on "
+        f"{wins['ours']} of {len(groups['mean, the real-rolls dice'])}, `bullet` on {wins['bullet']}; "
+        f"within 1.5x sampling noise on {sum(r['loo'] <= 1.5 * r['noise'] for r in rows)} of {len(rows)}"
+    )
 
     print("\nresponse surfaces: mean TVD to their own candidates' frequencies (the simulation noise of one candidate)")
     for name, gap, expected in fit_rows:
@@ -287,9 +289,11 @@ def main() -> int:
     # which settings the fit leans on: the rise of the total deviance when one setting sweeps its range
     total = lambda x: sum(deviance(d.counts, d.symmetrized(s.smoothed(x))) for d, s in zip(dice, surfaces))  # noqa: E731
     base = total(x_all)
-    print(f"\nin-sample fit over all {len(dice)} dice: "
-          + " ".join(f"{n}={v:.3g}" for n, v in zip(FREE, spec.values(x_all)))
-          + f"; total deviance {base:.1f} (defaults {total(x0):.1f}), prior {prior_penalty(x_all, x0, args.prior):.1f}")
+    print(
+        f"\nin-sample fit over all {len(dice)} dice: "
+        + " ".join(f"{n}={v:.3g}" for n, v in zip(FREE, spec.values(x_all)))
+        + f"; total deviance {base:.1f} (defaults {total(x0):.1f}), prior {prior_penalty(x_all, x0, args.prior):.1f}"
+    )
     print("rise of the total deviance as one setting sweeps its range (others at the in-sample fit):")
     leans = {}
     for k, name in enumerate(FREE):
