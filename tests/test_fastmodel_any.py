@@ -120,3 +120,13 @@ def test_every_expansion_round_trips_through_json_and_keeps_symmetry(dice, expan
     f, chain = data[3]
     ones = np.ones(len(chain), bool)
     assert np.allclose(back.correct(chain, f, ones), fit.correct(chain, f, ones), atol=1e-4)
+
+
+def test_random_dice_rest_on_every_face_and_are_reproducible(dice):
+    for d in dice:
+        assert d.margins().min() >= 0.02
+        assert len(d.values) == len(d.polyhedron.faces)
+    again = _dice(3)
+    assert [design_record(a) for a in again] == [design_record(b) for b in dice[:3]]
+    with pytest.raises(ValueError, match="no random dice of family"):
+        random_design("mesh", np.random.default_rng(0))
