@@ -15,8 +15,9 @@ Two steps, each resumable:
 
 Usage::
 
-    nice -n 10 python benchmarks/learn_correction.py --collect --designs 216 --drops 2000 --workers 1
-    python benchmarks/learn_correction.py --fit
+    nice -n 10 python benchmarks/learn_correction.py --collect --designs 180 --drops 600 --workers 1
+    python benchmarks/learn_correction.py --fit                # refit the constants, cross-validate, write
+    python benchmarks/learn_correction.py --fit --keep-chain   # the same on the packaged constants (quicker)
 """
 
 from __future__ import annotations
@@ -189,9 +190,15 @@ def main(argv=None) -> int:
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--keep-chain", action="store_true", help="--fit: keep the packaged chain constants")
     args = ap.parse_args(argv)
+    if not (args.collect or args.fit):
+        ap.error("nothing to do: give --collect, --fit or both")
+    if args.designs < 1 or args.drops < 1:
+        ap.error("--designs and --drops must be positive")
     if args.collect:
         collect(args.designs, args.drops, args.seed, args.workers)
     if args.fit:
+        if len(read_runs()) < 2 * FOLDS:
+            ap.error(f"--fit needs at least {2 * FOLDS} simulated dice in {TRAINING}; run --collect first")
         fit(keep_chain=args.keep_chain)
     return 0
 
