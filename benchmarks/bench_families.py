@@ -107,6 +107,7 @@ def models() -> dict:
 
 
 def main(argv=None) -> int:
+    from diefab.files import atomic_write
     from diefab.stats import tvd
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -165,7 +166,7 @@ def main(argv=None) -> int:
     out = Path(__file__).with_name("results") / "families.json"
     rows = [{"family": name, "median": dict(zip(fns, map(float, med))), "worst": dict(zip(fns, map(float, worst)))}
             for name, (med, worst) in summary.items()]  # fmt: skip
-    out.write_text(json.dumps({"designs": args.designs, "drops": args.drops, "seed": args.seed, "families": rows},
+    atomic_write(out, json.dumps({"designs": args.designs, "drops": args.drops, "seed": args.seed, "families": rows},
                               indent=1) + "\n")  # fmt: skip
     return 0
 
