@@ -7,9 +7,11 @@ For each target (default: 2d6, 3dF, binomial:4, the loaded d6
 (default options unless --budget is given), validates the die it wrote at
 --sims drops on --seed (a seed the design step never used; solid fill),
 and runs ``diefab net`` and ``diefab stl`` on it.  The baseline in the same
-run is the die the fast model alone designs (the design step's first
-simulation, 8,000 drops, before any correction by simulation).  Prints one
-row per target and writes the rows so far to --results after each.
+run is the die the fast model alone designs: the design step's first
+simulation, before any correction by simulation (for a two-class die, the
+distribution its first tuning drops give at the fast model's shape; a fair
+die needs no correction).  Prints one row per target and writes the rows so
+far to --results after each.
 """
 
 from __future__ import annotations
@@ -46,7 +48,7 @@ def main() -> int:
     out = args.out or Path(tempfile.mkdtemp(prefix="bench-design-"))
     print(f"design then validate ({args.sims} drops, seed {args.seed}, solid fill), net, stl; "
           f"{os.cpu_count()} cores; output in {out}", flush=True)  # fmt: skip
-    print(f"{'target':26s} {'family':10s} {'faces':>5s} {'design s':>9s} {'fast-only TVD':>13s} "
+    print(f"{'target':26s} {'family':14s} {'method':9s} {'faces':>5s} {'design s':>9s} {'fast-only TVD':>13s} "
           f"{'TVD':>7s} {'p':>8s} {'net':>4s} {'stl':>4s}", flush=True)  # fmt: skip
     rows = []
     for target in targets:
@@ -67,7 +69,8 @@ def main() -> int:
         steps = report.get("refinement") or []
         baseline = steps[0]["simulated_tvd"] if steps else float("nan")
         row = {
-            "target": target, "family": report["family"], "faces": len(report["values"]),
+            "target": target, "family": report["family"], "method": report.get("method", "shaped"),
+            "faces": len(report["values"]),
             "transitional": len(report["faces"]) - len(report["values"]), "design_seconds": seconds,
             "fast_only_tvd": baseline, "tvd": fit["tvd"], "p_value": fit["p_value"], "drops": args.sims,
             "seed": args.seed, "net_ok": net.returncode == 0, "stl_ok": stl.returncode == 0,
@@ -77,7 +80,7 @@ def main() -> int:
         }  # fmt: skip
         rows.append(row)
         _save(rows, args.results)
-        print(f"{target:26s} {row['family']:10s} {row['faces']:5d} {seconds:9.0f} {baseline:13.4f} "
+        print(f"{target:26s} {row['family']:14s} {row['method']:9s} {row['faces']:5d} {seconds:9.0f} {baseline:13.4f} "
               f"{row['tvd']:7.4f} {row['p_value']:8.3g} {'ok' if row['net_ok'] else 'FAIL':>4s} "
               f"{'ok' if row['stl_ok'] else 'FAIL':>4s}", flush=True)  # fmt: skip
     _save(rows, args.results)

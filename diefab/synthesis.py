@@ -1,19 +1,35 @@
 """From a target to a die: pick a family and face count, assign values, optimize, check.
 
-:func:`candidates` lists the families and face counts that can carry a
-target's values; :func:`synthesize` optimizes each under a deterministic
-model (its values assigned by :func:`~diefab.assignment.assign_values` on
-the starting shape), keeps the best, and -- with ``model="simulation"`` --
-refines it against pybullet: it drops the die, adds the simulated-minus-
-modelled face frequencies to the model as a correction, re-optimizes, and
-repeats while time is left, keeping the design whose simulated distance to
-the target is smallest.  The caller validates the result on a fresh seed.
+:func:`synthesize` tries, in order:
+
+1. a **fair die** whose faces are counted out to the target
+   (:mod:`diefab.symmetric`): exact by symmetry under any physics, when the
+   target's probabilities are multiples of ``1 / m`` and a steady fair die
+   with ``m`` faces exists (binomial:4 on 16 faces, a loaded d6 on 20);
+2. a **two-class die**: a bipyramid or trapezohedron whose two halves land
+   with different probabilities, faces counted out so that one number, the
+   top half's share of the landings, decides the whole distribution; that
+   share is tuned under the model, or by drops with ``model="simulation"``
+   (2d6 on 24 faces, 3dF on 18);
+3. **shaped dice**: every other candidate (:func:`candidates`) is optimized
+   under the solid-angle model, which is cheap, with values assigned by
+   :func:`~diefab.assignment.assign_values` on the starting shape; the best
+   is optimized under `model` and -- with ``model="simulation"`` -- refined
+   against pybullet: it drops the die, adds the simulated-minus-modelled face
+   frequencies to the model as a correction, re-optimizes, and repeats while
+   time is left, keeping the design whose simulated distance to the target
+   is smallest.
+
+``faces`` and ``family`` narrow the candidates (``faces=11`` for 2d6 asks for
+a shaped die).  The caller validates the result on a fresh seed.
 
 Examples
 --------
 >>> from diefab.targets import parse_target
->>> [(c.family, c.faces) for c in candidates(parse_target("2d6"))][:3]
-[('ngem', 11), ('prism', 11), ('prism', 11)]
+>>> [(c.family, c.faces, c.exact) for c in candidates(parse_target("binomial:4"))][:2]
+[('bipyramid', 16, True), ('prism', 5, False)]
+>>> [(c.family, c.faces, c.plan is not None) for c in candidates(parse_target("2d6"))][:2]
+[('bipyramid', 24, True), ('bipyramid', 24, True)]
 """
 
 from __future__ import annotations
@@ -24,6 +40,7 @@ from dataclasses import dataclass, field, replace
 from math import ceil
 
 import numpy as np
+from scipy.optimize import brentq
 
 from .assignment import assign_values, face_classes
 from .design import Design
@@ -31,9 +48,22 @@ from .errors import DesignError
 from .families import family as get_family
 from .geometry import resting_faces
 from .mass import Fill, mass_properties
-from .models import MODELS
+from .models import MODELS, value_probabilities
 from .optimize import INFEASIBLE, optimize_design
-from .stats import tvd
+from .readings import unreadable
+from .stats import pearson_divergence, tvd
+from .symmetric import (
+    MAX_FACES,
+    TwoClass,
+    face_counts,
+    fair_faces,
+    fair_shapes,
+    fair_values,
+    tipping_angle,
+    tune_share,
+    two_class_plans,
+    two_class_values,
+)
 from .targets import Target
 
 __all__ = ["Candidate", "Synthesis", "candidates", "synthesize"]
@@ -51,6 +81,8 @@ MIN_STEP_SECONDS = 10.0
 REFINE_STEPS = 6
 #: Refinement stops once the simulated TVD is below this.
 REFINE_GOAL = 0.008
+#: Smallest tipping angle (degrees) a two-class die's tuning may reach.
+STEADY_TIPPING = 9.0
 
 
 @dataclass(frozen=True)
@@ -60,6 +92,10 @@ class Candidate:
     family: str
     params: dict[str, float]
     faces: int
+    #: A fair die whose face counts give the target exactly (:mod:`diefab.symmetric`): nothing to optimize.
+    exact: bool = False
+    #: A two-class die whose face counts give the target once one share is tuned (:mod:`diefab.symmetric`).
+    plan: TwoClass | None = None
 
     def polyhedron(self):
         return get_family(self.family).polyhedron(self.params)
@@ -97,7 +133,7 @@ def candidates(target: Target, faces: int | None = None, family: str | None = No
         v = int(target.values[np.argmax(target.probabilities <= 0)])
         raise DesignError(f"target {target.spec!r} gives value {v} probability 0: no face can carry it, leave it out")
     asym = {} if _symmetric(target) else {"sx": 0.1, "sz": 0.05}
-    found: list[Candidate] = []
+    found: list[Candidate] = _fair(target, faces) + _two_class(target, faces)
     first = max(3, ceil((k - 1) / 2))
     for n in range(first, min(first + 2, 13)):
         found.append(Candidate("ngem", {"n": n, "a": 1.3, "b": 0.6, "c": 0.5, "d": 1.5, **asym}, 2 * n + 1))
@@ -131,7 +167,22 @@ def candidates(target: Target, faces: int | None = None, family: str | None = No
         raise DesignError(
             f"no {what}{'' if faces is None else f' with {faces} faces'} fits the {k} values of target {target.spec!r}"
         )
-    return sorted(found, key=lambda c: c.faces)
+    return sorted(found, key=lambda c: (not c.exact, c.plan is None, c.faces))
+
+
+def _fair(target: Target, faces: int | None) -> list[Candidate]:
+    """The fair die with the fewest faces (or with `faces` faces) whose face counts give `target` exactly."""
+    fewest = fair_faces(target, max(MAX_FACES, faces or 0))
+    if fewest is None or (faces is not None and faces % fewest):
+        return []
+    m = faces or fewest
+    return [Candidate(family, params, m, exact=True) for family, params in fair_shapes(m)]
+
+
+def _two_class(target: Target, faces: int | None) -> list[Candidate]:
+    """Two-class dice that roll `target` once their top half's share is tuned (with `faces` faces, if given)."""
+    plans = two_class_plans(target, max(MAX_FACES, faces or 0))
+    return [Candidate(p.family, p.params, p.faces, plan=p) for p in plans if faces in (None, p.faces)][:2]
 
 
 def _forced(family: str, faces: int, asym: dict[str, float]) -> Candidate:
@@ -163,6 +214,8 @@ class Synthesis:
     tried: list[dict] = field(default_factory=list)
     #: Refinement steps: simulated TVD at each.
     steps: list[dict] = field(default_factory=list)
+    #: How the die carries the target: "fair", "two-class" or "shaped".
+    method: str = "shaped"
 
 
 def _start(candidate: Candidate, target: Target, name: str, fill: Fill, size_mm: float) -> Design:
@@ -198,6 +251,7 @@ def synthesize(
     size_mm: float = 30.0,
     min_margin: float = 0.05,
     workers: int | None = None,
+    settings=None,
     progress: Callable[[str], None] | None = None,
 ) -> Synthesis:
     """Design a die for `target`.
@@ -218,6 +272,8 @@ def synthesize(
         Wall time for the whole search; each stage stops when its share runs out.
     seed : int
         Seeds the optimizer's random starts and the refinement's drops.
+    settings : PhysicsSettings, optional
+        The physics the drops of ``simulation`` use (default: the design's).
 
     Raises
     ------
@@ -231,6 +287,15 @@ def synthesize(
     if final_model not in MODELS:
         raise DesignError(f"model {model!r} is not available (models: {', '.join([*MODELS, 'simulation'])})")
     pool = candidates(target, faces, family)
+    fair = _fair_design(next((c for c in pool if c.exact), None), target, name, fill, size_mm, final_model, say)
+    if fair is not None:
+        return fair
+    for cand in (c for c in pool if c.plan is not None):
+        found = _two_class_design(cand, target, name, fill, size_mm, model, t0 + budget_seconds, seed, workers,
+                                  settings, say)  # fmt: skip
+        if found is not None:
+            return found
+    pool = [c for c in pool if not c.exact and c.plan is None]
     rank_share = {"simulation": 0.2, "solid-angle": 1.0}.get(model, 0.6) * budget_seconds
     best, best_key, tried = None, None, []
     for i, cand in enumerate(pool):
@@ -263,8 +328,124 @@ def synthesize(
             say(f"the {final_model} model finds no stable die from the solid-angle optimum: {exc}")
     out = Synthesis(best.design, best.objective, best.values, final_model, tried)
     if model == "simulation":
-        _refine(out, target, t0 + budget_seconds, seed, min_margin, workers, say)
+        _refine(out, target, t0 + budget_seconds, seed, min_margin, workers, settings, say)
     return out
+
+
+def _fair_design(
+    cand: Candidate | None, target: Target, name: str, fill: Fill, size_mm: float, model: str, say
+) -> Synthesis | None:
+    """The fair die of `cand` with its faces counted out to `target`, or None if it cannot be read."""
+    if cand is None:
+        return None
+    poly = cand.polyhedron()
+    values = fair_values(poly, target, face_counts(target, cand.faces))
+    why = unreadable(poly, values)
+    if why is not None:
+        say(f"{cand.family} ({cand.faces} faces, fair): {why}")
+        return None
+    d = Design(name, cand.family, cand.params, values=values, target=target.spec, fill=fill, size_mm=size_mm)
+    predicted = value_probabilities(d, model)
+    objective = pearson_divergence(predicted, target.aligned(d.support))
+    say(f"{cand.family} ({cand.faces} faces): fair by symmetry, its faces counted out to the target exactly")
+    tried = [{"family": cand.family, "faces": cand.faces, "objective": objective, "fair": True}]
+    return Synthesis(d, objective, predicted, model, tried, method="fair")
+
+
+def _two_class_design(
+    cand: Candidate,
+    target: Target,
+    name: str,
+    fill: Fill,
+    size_mm: float,
+    model: str,
+    deadline: float,
+    seed: int,
+    workers,
+    settings,
+    say,
+) -> Synthesis | None:
+    """The two-class die of `cand`, its share tuned under `model` (by drops for ``simulation``), or None."""
+    plan = cand.plan
+    fam = get_family(cand.family)
+    lo, hi = fam.bounds([plan.other])[0]
+    poly0 = cand.polyhedron()
+    values = two_class_values(poly0, target, plan)
+
+    def build(value: float) -> Design:
+        return Design(name, cand.family, {**plan.params, plan.other: float(value)}, values=values,
+                      target=target.spec, fill=fill, size_mm=size_mm)  # fmt: skip
+
+    rank = RANK_MODEL if model == "simulation" else model
+
+    def model_share(value: float) -> float:
+        d = build(value)
+        return float(MODELS[rank](d.polyhedron, d.mass_properties().center)[: plan.n].sum())
+
+    start = plan.params[[k for k in plan.params if k != "n"][0]]
+    grid = np.linspace(lo, hi, 81)
+    # the shapes around the fair one that stay steady: tuning never leaves them
+    steady = np.array([tipping_angle(build(v).polyhedron, build(v).mass_properties().center) for v in grid])
+    steady = steady >= STEADY_TIPPING
+    i0 = int(np.argmin(np.abs(grid - start)))
+    a, b = i0, i0
+    while a > 0 and steady[a - 1]:
+        a -= 1
+    while b < len(grid) - 1 and steady[b + 1]:
+        b += 1
+    grid = grid[a : b + 1]
+    lo, hi = float(grid[0]), float(grid[-1])
+    shares = np.array([model_share(v) for v in grid]) - plan.share
+    crossings = [i for i in range(len(grid) - 1) if shares[i] * shares[i + 1] <= 0]
+    if crossings:
+        i = min(crossings, key=lambda j: abs(grid[j] - start))
+        guess = brentq(lambda v: model_share(v) - plan.share, grid[i], grid[i + 1], xtol=1e-6)
+    else:
+        guess = float(grid[np.argmin(np.abs(shares))])
+    why = unreadable(build(guess).polyhedron, values)
+    if why is not None:
+        say(f"{cand.family} ({cand.faces} faces, two classes): {why}")
+        return None
+    slope = (model_share(min(guess + 0.01, hi)) - model_share(max(guess - 0.01, lo))) / (
+        min(guess + 0.01, hi) - max(guess - 0.01, lo)
+    )
+    say(f"{cand.family} ({cand.faces} faces): the top half must take {plan.x}/{plan.x + plan.y} of the landings; "
+        f"{plan.other} = {guess:.4f} under the {rank} model")  # fmt: skip
+    steps: list[dict] = []
+    value = guess
+    if model == "simulation":
+        from .physics import simulate
+
+        def share_of(v: float, n: int, s: int) -> tuple[float, int]:
+            sim = simulate(build(v), n, seed=s, workers=workers, settings=settings)
+            return float(sim.face_counts[: plan.n].sum() / max(sim.landed, 1)), int(sim.landed)
+
+        tuning = tune_share(share_of, guess, (lo, hi), plan.share, slope=slope, deadline=deadline, seed=seed, say=say)
+        value = tuning.value
+        goal = target.aligned(target.values)
+        steps = [
+            {"step": i, plan.other: v, "share": p, "landed": n, "simulated_tvd": tvd(_per_value(plan, p), goal)}
+            for i, (v, p, n) in enumerate(tuning.evaluations)
+        ]
+    d = build(value)
+    if unreadable(d.polyhedron, values) is not None:
+        say(f"{cand.family} ({cand.faces} faces): tuned to {plan.other} = {value:.4f}, which cannot be read")
+        return None
+    if model == "simulation":  # the share the drops say the settled shape has: the goal, or near it
+        share = float(np.interp(value, *zip(*sorted((v, p) for v, p, _ in tuning.evaluations))))
+        predicted = _per_value(plan, share)[np.searchsorted(target.values, d.support)]
+    else:
+        predicted = value_probabilities(d, rank)
+    objective = pearson_divergence(predicted, target.aligned(d.support))
+    tried = [{"family": cand.family, "faces": cand.faces, "objective": objective, "two_class": True}]
+    return Synthesis(
+        d, objective, predicted, "simulation" if model == "simulation" else rank, tried, steps, "two-class"
+    )
+
+
+def _per_value(plan: TwoClass, share: float) -> np.ndarray:
+    """(k,) value probabilities of a two-class die whose top half takes `share` of the landings."""
+    return (np.array(plan.alpha) * share + np.array(plan.beta) * (1 - share)) / plan.n
 
 
 def _not_on_faces(design: Design) -> int:
@@ -279,7 +460,9 @@ def _not_on_faces(design: Design) -> int:
     )
 
 
-def _refine(out: Synthesis, target: Target, deadline: float, seed: int, min_margin: float, workers, say) -> None:
+def _refine(
+    out: Synthesis, target: Target, deadline: float, seed: int, min_margin: float, workers, settings, say
+) -> None:
     """Correct the model by simulation until the simulated TVD is small or time runs out (updates `out`)."""
     from .physics import simulate
 
@@ -291,7 +474,7 @@ def _refine(out: Synthesis, target: Target, deadline: float, seed: int, min_marg
         drops = REFINE_DROPS if step else REFINE_DROPS // 2
         if time.monotonic() + per_drop * drops > deadline:
             break
-        sim = simulate(design, drops, seed=seed + step, workers=workers)
+        sim = simulate(design, drops, seed=seed + step, workers=workers, settings=settings)
         per_drop = sim.seconds / drops
         distance = tvd(sim.value_probabilities(design), goal)
         out.steps.append(

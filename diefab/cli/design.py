@@ -11,6 +11,12 @@ import numpy as np
 
 from .common import console, emit_json, json_option, out_option
 
+_METHOD = {
+    "fair": "a fair die, its faces counted out to the target",
+    "two-class": "two classes of faces counted out to the target, one share tuned",
+    "shaped": "shape optimized",
+}
+
 
 def _slug(text: str) -> str:
     return re.sub(r"[^a-z0-9]+", "-", text.lower()).strip("-") or "target"
@@ -18,7 +24,7 @@ def _slug(text: str) -> str:
 
 @click.command()
 @click.argument("target", metavar="TARGET")
-@click.option("--faces", type=click.IntRange(2, 30), default=None, help="Resting faces of the die (default: chosen).")
+@click.option("--faces", type=click.IntRange(2, 120), default=None, help="Resting faces of the die (default: chosen).")
 @click.option("--family", "family_name", default="auto", show_default=True,
               help="Die family (ngem, prism, bipyramid, trapezohedron, cuboid, freeform, gem) or auto.")  # fmt: skip
 @click.option("--fill", type=click.Choice(["solid", "shell", "print"]), default="solid", show_default=True,
@@ -78,7 +84,8 @@ def design(target, faces, family_name, fill, model, budget, name, seed, size_mm,
     d = replace(
         found.design,
         name=name or f"{found.design.family}-{_slug(target)}",
-        description=f"designed for {target} by diefab design ({found.model} model, seed {seed})",
+        description=f"designed for {target} by diefab design: {_METHOD[found.method]} "
+        f"({found.model} model, seed {seed})",
     )
     path = atomic_write(
         output_path(out_dir, d.name, ".toml"),
@@ -101,6 +108,7 @@ def design(target, faces, family_name, fill, model, budget, name, seed, size_mm,
         "predicted": {str(v): float(p) for v, p in zip(d.support, found.predicted)},
         "target": {str(v): float(p) for v, p in zip(d.support, aligned)},
         "model": found.model,
+        "method": found.method,
         "objective": float(pearson_divergence(found.predicted, aligned)),
         "tvd": float(tvd(found.predicted, aligned)),
         "validated": validated,
@@ -119,6 +127,7 @@ def _print_report(d, report: dict, path: Path) -> None:
 
     con = console()
     con.print(f"[bold]{d.name}[/bold]  family {d.family}  " + " ".join(f"{k}={v:.4g}" for k, v in d.params.items()))
+    con.print(_METHOD[report["method"]])
     table = Table("value", "faces", "predicted", "target")
     faces_of: dict[int, list[str]] = {}
     for face, value in d.values.items():

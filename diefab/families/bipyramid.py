@@ -66,7 +66,7 @@ _READ = (
 BIPYRAMID = Family(
     "bipyramid",
     (
-        Parameter("n", 3, 12, "sides of the equator (2n faces)", integer=True),
+        Parameter("n", 3, 60, "sides of the equator (2n faces)", integer=True),
         Parameter("h", 0.3, 4.0, "height of the top apex (equator circumradius 1)"),
         Parameter("g", 0.3, 4.0, "depth of the bottom apex (default h)", optional=True, default=lambda p: p["h"]),
     ),
@@ -80,7 +80,7 @@ BIPYRAMID = Family(
 TRAPEZOHEDRON = Family(
     "trapezohedron",
     (
-        Parameter("n", 3, 12, "kites around each apex (2n faces)", integer=True),
+        Parameter("n", 3, 60, "kites around each apex (2n faces)", integer=True),
         Parameter("t", 0.2, 2.5, "slope of the top kites' normals"),
         Parameter(
             "u", 0.2, 2.5, "slope of the bottom kites' normals (default t)", optional=True, default=lambda p: p["t"]
