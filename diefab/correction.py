@@ -4,9 +4,8 @@ The chain model (:func:`diefab.fastmodel.landing_probabilities`) is general
 but coarse, and its five constants were fitted to gems.  Here they are
 refitted to random dice of every family dropped in pybullet, and what the
 chain still misses is learned from the same dice: every face the die can
-rest on gets a logit
-correction ``g_f`` that is a function of the face's own geometry and
-physics, and
+rest on gets a logit correction ``g_f`` that is a function of the face's
+own geometry and physics, and
 
 ``p_f  ∝  chain_f * exp(g_f)``
 
@@ -23,10 +22,10 @@ solid stays uniform), and the model is deterministic.
 ``g`` is linear in the standardized features (``expansion="linear"``; the
 first six of them, ``"small"``), or in them and their pairwise products
 (``"quadratic"``), or in them and Gaussian kernels centred on training
-faces (``"rbf"``).  The weights minimize the
-cross-entropy between the simulated frequencies and ``p``, averaged over
-the training dice, plus a ridge penalty; the expansion and the penalty are
-chosen by cross-validation grouped by die
+faces (``"rbf"``).  The weights minimize the cross-entropy between the
+simulated frequencies and ``p``, averaged over the training dice, plus a
+ridge penalty; the expansion and the penalty are chosen by cross-validation
+grouped by die
 (``benchmarks/learn_correction.py --fit``).
 
 Examples
@@ -86,7 +85,8 @@ def face_features(
     center : (3,) float
         Centre of mass, model units.
     chain : (m,) float, optional
-        The chain model's probabilities (computed when not given).
+        The chain model's probabilities (default: with the module's constants;
+        a :class:`Correction` passes its own chain's).
 
     Returns
     -------
