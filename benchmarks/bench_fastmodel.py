@@ -156,13 +156,29 @@ def chain_probabilities(designs) -> np.ndarray:
     return np.array([landing_probabilities(d.polyhedron, d.mass_properties().center) for d in designs])
 
 
-class TrainingSet:
-    """The training designs with what the discrepancy is learned from."""
+def base_probabilities(designs) -> np.ndarray:
+    """(n, m) what a fill's correction is learned on top of: the fast model with the body's inertia, no fill layer."""
+    from diefab.fastmodel import fast_model
 
-    def __init__(self, designs, runs):
-        self.designs = designs
+    out = []
+    for d in designs:
+        body = d.mass_properties()
+        out.append(fast_model(d.polyhedron, body.center, inertia=body.inertia / body.mass))
+    return np.array(out)
+
+
+class TrainingSet:
+    """The training designs with what the discrepancy is learned from.
+
+    Solid gems: the chain's probabilities (the gem discrepancy); gems of
+    another fill: the fast model without that fill's layer (:func:`base_probabilities`).
+    """
+
+    def __init__(self, designs, runs, fill: str = "solid"):
+        self.designs, self.fill = designs, fill
         self.points = np.array([[d.params[n] for n in "abcde"] for d in designs])
-        self.q, self.p = frequencies(runs), chain_probabilities(designs)
+        self.q = frequencies(runs)
+        self.p = chain_probabilities(designs) if fill == "solid" else base_probabilities(designs)
         self.margins = np.array([d.margins() for d in designs])
 
     def cross_validate(self, n: int | None = None, distances: bool = False, **kw):
@@ -190,39 +206,69 @@ class TrainingSet:
         return Discrepancy.learn(self.points, self.margins, self.p, self.q, **kw)
 
 
-def learn(training: TrainingSet, drops: int, seed: int) -> dict:
-    """Learn the gem discrepancy from the training set and write it into the package.
+def learn(training: TrainingSet, drops: int, seed: int, design_seed: int = TRAIN_SEED) -> dict:
+    """Learn the gem discrepancy (or a fill's correction) from the training set and write it into the package.
 
     The smoothing is chosen from :data:`SMOOTHING` by 5-fold cross-validation
     (fixed folds, each fold learning from the others): the largest whose mean
     held-out TVD is within 1 % of the least (more smoothing, same accuracy).
+    A fill's correction, learned from fewer designs, also chooses its
+    coordinates (parameters alone, or with the margins and probabilities)
+    the same way.
     """
     from diefab import fastmodel
+    from diefab.errors import DesignError
     from diefab.physics import PhysicsSettings
 
     scores = {}
-    for smoothing in SMOOTHING:
-        err = training.cross_validate(smoothing=smoothing)
-        scores[smoothing] = (float(np.median(err)), float(np.mean(err)))
-        print(f"  smoothing {smoothing:g}: {FOLDS}-fold CV TVD median {scores[smoothing][0]:.4f} "
-              f"mean {scores[smoothing][1]:.4f}", file=sys.stderr, flush=True)  # fmt: skip
+    # a fill's correction, learned from few designs, also chooses its coordinates and kernel
+    choices = [(True, "thin_plate_spline")]
+    if training.fill != "solid":
+        choices = [(c, k) for c in (False, True) for k in ("thin_plate_spline", "linear")]
+    for physics, kernel in choices:
+        for smoothing in SMOOTHING:
+            try:
+                err = training.cross_validate(smoothing=smoothing, physics_coordinates=physics, kernel=kernel)
+            except DesignError:  # too few designs in a fold for these coordinates
+                continue
+            scores[physics, kernel, smoothing] = (float(np.median(err)), float(np.mean(err)))
+            print(f"  {'margins+chain' if physics else 'parameters'} {kernel} smoothing {smoothing:g}: "
+                  f"{FOLDS}-fold CV TVD median {scores[physics, kernel, smoothing][0]:.4f} "
+                  f"mean {scores[physics, kernel, smoothing][1]:.4f}", file=sys.stderr, flush=True)  # fmt: skip
     least = min(v[1] for v in scores.values())
-    best = max(k for k, v in scores.items() if v[1] <= 1.01 * least)
+    # the largest smoothing within 1 % of the least mean (physics coordinates and thin-plate splines first)
+    physics, kernel, best = max((k for k, v in scores.items() if v[1] <= 1.01 * least),
+                                key=lambda k: (k[2], k[0], k[1] == "thin_plate_spline"))  # fmt: skip
+    before = np.array([tvd(p, q) for p, q in zip(training.p, training.q)])
     names = ("temperature", "tau", "area_power", "roll_power", "height_weight")
     info = {
         "designs": len(training.designs),
-        "design_seed": TRAIN_SEED,
+        "design_seed": design_seed,
         "min_margin": MIN_MARGIN,
         "drops": drops,
         "seed": seed,
         "physics": physics_version(),
         "settings": PhysicsSettings().as_dict(),
         "chain": {k: getattr(fastmodel, k.upper()) for k in names},
-        "cv": {f"{k:g}": {"median_tvd": round(v[0], 5), "mean_tvd": round(v[1], 5)} for k, v in scores.items()},
+        "cv": {
+            f"{k:g}": {"median_tvd": round(v[0], 5), "mean_tvd": round(v[1], 5)}
+            for (c, kern, k), v in scores.items()
+            if c == physics and kern == kernel
+        },  # fmt: skip
     }
-    atomic_write(DISCREPANCY / fastmodel.DISCREPANCY_FILE, training.learn(smoothing=best, info=info).to_json())
+    name = fastmodel.DISCREPANCY_FILE
+    if training.fill != "solid":
+        info["fill"] = training.designs[0].fill.to_mapping()
+        info["on_top_of"] = "fast model without this layer (chain with the body's inertia + gem discrepancy)"
+        info["before_median_tvd"] = round(float(np.median(before)), 5)
+        name = fastmodel.fill_discrepancy_file(training.fill)
+    fit = training.learn(smoothing=best, physics_coordinates=physics, kernel=kernel, info=info)
+    atomic_write(DISCREPANCY / name, fit.to_json())
     fastmodel.gem_discrepancy.cache_clear()
-    return {"smoothing": best, "cv_median_tvd": scores[best][0], "cv_mean_tvd": scores[best][1]}
+    fastmodel._packaged_layer.cache_clear()
+    score = scores[physics, kernel, best]
+    out = {"file": name, "smoothing": best, "physics_coordinates": physics, "kernel": kernel}
+    return out | {"cv_median_tvd": score[0], "cv_mean_tvd": score[1], "median_tvd_without": float(np.median(before))}
 
 
 def ablation(training: TrainingSet, test, test_q) -> None:
@@ -280,7 +326,11 @@ def main(argv=None) -> None:
     ap.add_argument("--test-seed", type=int, default=TEST_SEED, help="design seed of the test set")
     ap.add_argument("--fill", choices=("solid", "shell", "paper", "print"), default="solid",
                     help="fill of the test gems (the discrepancy was learned on solid ones)")  # fmt: skip
+    ap.add_argument("--train-fill", choices=("solid", "shell", "paper", "print"), default="solid",
+                    help="fill of the training gems (--learn: solid learns the gem discrepancy, "
+                         "another fill that fill's correction on top of it)")  # fmt: skip
     ap.add_argument("--train-designs", type=int, default=800)
+    ap.add_argument("--train-seed", type=int, default=TRAIN_SEED, help="design seed of the training set")
     ap.add_argument("--train-drops", type=int, default=4_000)
     ap.add_argument("--chain-designs", type=int, default=20, help="training designs --calibrate fits the chain on")
     ap.add_argument("--seed", type=int, default=0, help="physics seed of the drops")
@@ -291,17 +341,20 @@ def main(argv=None) -> None:
     ap.add_argument("--optima", action="store_true", help="validate the 4dF optima of the fast model and its chain")
     ap.add_argument("--collect-only", action="store_true", help="simulate (fill the cache) and stop")
     args = ap.parse_args(argv)
+    if args.ablation and args.train_fill != "solid":
+        ap.error("--ablation studies the solid gems' discrepancy; leave out --train-fill")
     if args.calibrate and (args.learn or args.ablation):
         ap.error("--calibrate prints constants to paste into fastmodel.py; --learn afterwards, in a second run")
 
     cache = load_cache()
     # the training set is simulated only when it is used
     if args.learn or args.ablation or args.collect_only:
-        train = random_designs(args.train_designs, TRAIN_SEED)
+        train = random_designs(args.train_designs, args.train_seed, args.train_fill)
     else:
         train = random_designs(args.chain_designs, TRAIN_SEED) if args.calibrate else []
     test = random_designs(args.designs, args.test_seed, args.fill)
-    train_runs = simulated(train, args.train_drops, args.seed, "train", cache, args.workers)
+    train_which = "train" if args.train_fill == "solid" else f"train-{args.train_fill}"
+    train_runs = simulated(train, args.train_drops, args.seed, train_which, cache, args.workers)
     which = "test" if args.test_seed == TEST_SEED else f"test-{args.test_seed}"
     which += "" if args.fill == "solid" else f"-{args.fill}"
     test_runs = simulated(test, args.drops, args.seed, which, cache, args.workers)
@@ -317,23 +370,34 @@ def main(argv=None) -> None:
         fit = fastmodel.calibrate(train, [np.array(r["face_counts"]) for r in train_runs])
         print(f"calibrated the chain on {len(train)} training designs x {args.train_drops} drops: {fit}")
         constants = {k: v for k, v in fit.items() if k != "mean_tvd"}
-    training = TrainingSet(train, train_runs) if (args.learn or args.ablation) else None
+    training = TrainingSet(train, train_runs, args.train_fill) if (args.learn or args.ablation) else None
     if args.learn:
-        fit = learn(training, args.train_drops, args.seed)
-        print(f"learned the gem discrepancy from {len(train)} training designs x {args.train_drops} drops: {fit}")
+        fit = learn(training, args.train_drops, args.seed, args.train_seed)
+        print(f"learned from {len(train)} {args.train_fill} training designs x {args.train_drops} drops: {fit}")
 
-    def chain(poly, center):
-        return fastmodel.landing_probabilities(poly, center, **constants)
+    if not test:  # --designs 0: learning (or calibrating) only
+        return
+
+    def chain(poly, center, *, fill=None, inertia=None):
+        return fastmodel.landing_probabilities(poly, center, inertia=inertia, **constants)
+
+    def solid_trained(poly, center, *, fill=None, inertia=None):
+        return MODELS["fast"](poly, center)
 
     # with new chain constants the packaged discrepancy (learned against the old chain) does not apply
     models = {"fast": MODELS["fast"], "chain": chain, "solid": MODELS["solid-angle"]}
+    if args.fill != "solid":  # the fast model as it was before it knew the fill, for comparison
+        models["fast-solid"] = solid_trained
     if args.calibrate:
         del models["fast"]
     found = fastmodel.gem_discrepancy()
     rows, near = [], []
     for d, q in zip(test, frequencies(test_runs)):
-        poly, center = d.polyhedron, d.mass_properties().center
-        rows.append([tvd(fn(poly, center), q) for fn in models.values()])
+        body = d.mass_properties()
+        poly, center = d.polyhedron, body.center
+        kw = {"fill": d.fill, "inertia": body.inertia / body.mass}
+        rows.append([tvd(fn(poly, center, **kw) if name != "solid" else fn(poly, center), q)
+                     for name, fn in models.items()])  # fmt: skip
         near.append(found.distance(d.params, d.margins(), fastmodel.landing_probabilities(poly, center)))
     rows = np.array(rows)
 
@@ -361,6 +425,14 @@ def main(argv=None) -> None:
             print(f"gem discrepancy: smoothing {found.smoothing:g}, {FOLDS}-fold CV on the training set: "
                   f"median TVD {cv['median_tvd']:.4f}, mean {cv['mean_tvd']:.4f} "
                   f"(at {info['drops']} drops, noise included)")  # fmt: skip
+        layer = fastmodel.fill_discrepancy(args.fill)
+        if layer is not None:
+            li = layer.info
+            cv = li["cv"][f"{layer.smoothing:g}"]
+            print(f"{args.fill} fill: its correction learned from {li['designs']} {li['fill']['kind']} gems x "
+                  f"{li['drops']} drops (coordinates: {'margins+chain' if layer.physics_coordinates else 'parameters'}"
+                  f", smoothing {layer.smoothing:g}), {FOLDS}-fold CV median TVD {cv['median_tvd']:.4f} "
+                  f"(without it {li['before_median_tvd']:.4f}; at {li['drops']} drops, noise included)")  # fmt: skip
     if args.ablation:
         ablation(training, test, frequencies(test_runs))
     if args.optima:

@@ -4,7 +4,9 @@ Run:  python benchmarks/design_for_fill.py --fill paper|print [--rounds 3] [--dr
 
 Starts from the fast model's optimum for the fill (``diefab optimize
 fudge-gem-sim --fill FILL --model fast``) and repeats: drop the current die
-in pybullet with its fill (`--drops`, a new physics seed every round),
+in pybullet with its fill (`--drops`, a new physics seed every round; the
+counts are appended to ``OUT/fudge-gem-FILL-rounds.jsonl``, and the
+correction pools every simulation of that very die kept there),
 take the simulated face frequencies minus the fast model's probabilities
 (averaged over mirror-image faces) as a fixed correction, and re-fit the
 parameters to 4dF under the fast model plus that correction, from the
@@ -19,6 +21,7 @@ layers, 15 % infill).  Validate it on a fresh seed with ``diefab validate``.
 from __future__ import annotations
 
 import argparse
+import json
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -28,9 +31,10 @@ import numpy as np
 from diefab.design import design_to_toml, load_design
 from diefab.fastmodel import fast_model
 from diefab.mass import Fill
-from diefab.models import MODELS, to_values
+from diefab.models import FILL_MODELS, MODELS, to_values
 from diefab.optimize import optimize_design
 from diefab.physics import simulate
+from diefab.readings import unreadable
 from diefab.stats import tvd
 
 MIRRORS = ((0, 2), (1, 3), (5, 7), (6, 8))  # the gem's mirror-image faces
@@ -53,8 +57,11 @@ def main() -> None:
     ap.add_argument("--min-margin", type=float, default=0.05)
     ap.add_argument("--out", type=Path, default=Path("templates"))
     ap.add_argument("--start", type=Path, default=None, help="continue from this design file (skip the fast optimum)")
+    ap.add_argument("--read-by", default="face,vertex",
+                    help="reading conventions a value may use (net and stl mark faces and the gem's apex)")  # fmt: skip
     args = ap.parse_args()
 
+    read_by = tuple(args.read_by.split(","))
     base = load_design("fudge-gem-sim")
     design = replace(base, name=f"fudge-gem-{args.fill}", fill=Fill(args.fill))
     goal = design.target_distribution.aligned(design.support)
@@ -62,7 +69,8 @@ def main() -> None:
     if args.start is not None:
         design = replace(design, params=load_design(args.start).params)
     else:
-        design = optimize_design(design, model="fast", min_margin=args.min_margin, starts=6, seed=0).design
+        design = optimize_design(design, model="fast", min_margin=args.min_margin, starts=6, seed=0,
+                                 read_by=read_by).design  # fmt: skip
     print(f"start for {design.fill.describe()}: "
           + " ".join(f"{k}={v:.4f}" for k, v in design.params.items()), flush=True)  # fmt: skip
     correction = np.zeros(len(design.polyhedron.faces))
@@ -70,10 +78,21 @@ def main() -> None:
     for k in range(args.rounds):
         result = simulate(design, args.drops, seed=args.seed + k, workers=args.workers)
         counts = np.asarray(result.face_counts, dtype=float)
-        q = counts / counts.sum()
-        p = fast_model(design.polyhedron, design.mass_properties().center)
-        sim_tvd = tvd(to_values(design, q), goal)
-        history.append((dict(design.params), sim_tvd))
+        rounds_file = args.out / f"fudge-gem-{args.fill}-rounds.jsonl"  # every simulation kept, one per line
+        with rounds_file.open("a", encoding="utf-8") as f:
+            f.write(json.dumps({"fill": design.fill.to_mapping(), "params": dict(design.params), "drops": args.drops,
+                                "seed": args.seed + k, "face_counts": result.face_counts.tolist(),
+                                "cocked": result.cocked, "unsettled": result.unsettled}) + "\n")  # fmt: skip
+        # the correction pools every simulation of this very die in this fill kept in the file (earlier runs too)
+        same = [r for r in map(json.loads, rounds_file.read_text(encoding="utf-8").splitlines())
+                if r["params"] == dict(design.params) and r["fill"] == design.fill.to_mapping()]  # fmt: skip
+        pooled = np.sum([r["face_counts"] for r in same], axis=0, dtype=float)
+        q = pooled / pooled.sum()
+        body = design.mass_properties()
+        p = fast_model(design.polyhedron, body.center, fill=design.fill, inertia=body.inertia / body.mass)
+        sim_tvd = tvd(to_values(design, counts / counts.sum()), goal)  # this round's drops alone
+        if unreadable(design.polyhedron, design.values, tuple(design.labels), read_by) is None:
+            history.append((dict(design.params), sim_tvd))  # only a die that reads as made can be the answer
         print(f"round {k + 1}: simulated TVD {sim_tvd:.4f} ({args.drops} drops, seed {args.seed + k}); "
               f"fast model alone {tvd(to_values(design, p), goal):.4f}; {time.perf_counter() - t0:.0f} s",
               flush=True)  # fmt: skip
@@ -81,17 +100,22 @@ def main() -> None:
         if k == args.rounds - 1:
             break
 
-        def corrected(poly, center, r=correction):
-            out = np.clip(fast_model(poly, center) + r, 0, None)
+        def corrected(poly, center, *, fill=None, inertia=None, r=correction):
+            out = np.clip(fast_model(poly, center, fill=fill, inertia=inertia) + r, 0, None)
             return out / out.sum()
 
         MODELS["fast-corrected"] = corrected
+        FILL_MODELS.add("fast-corrected")
         try:
-            fit = optimize_design(design, model="fast-corrected", min_margin=args.min_margin, starts=0, seed=0)
+            fit = optimize_design(design, model="fast-corrected", min_margin=args.min_margin, starts=0, seed=0,
+                                  read_by=read_by)  # fmt: skip
         finally:
             del MODELS["fast-corrected"]
+            FILL_MODELS.discard("fast-corrected")
         design = replace(fit.design, name=f"fudge-gem-{args.fill}")
         print("  refit: " + " ".join(f"{k}={v:.4f}" for k, v in design.params.items()), flush=True)
+    if not history:
+        raise SystemExit(f"no round's die reads by {args.read_by}: nothing written")
     best_params, best_tvd = min(history, key=lambda h: h[1])
     final = replace(
         design.with_params(**best_params),

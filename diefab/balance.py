@@ -12,7 +12,7 @@ Examples
 --------
 >>> from diefab.design import load_design
 >>> d6 = load_design("d6")
->>> b = made_balance(d6, d6.polyhedron.centroid, "paper", "160 g/m² card")
+>>> b = made_balance(d6, d6.polyhedron.centroid, "paper", "160 g/m² card", inertia=np.eye(3))
 >>> round(b.predicted_tvd, 6), b.warning is None
 (0.0, True)
 """
@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .design import Design, format_value
+from .mass import Fill, MassProperties
 from .stats import tvd
 
 __all__ = ["TVD_SLACK", "Balance", "made_balance"]
@@ -95,7 +96,16 @@ class Balance:
         )
 
 
-def made_balance(design: Design, center: np.ndarray, material: str, settings: str, spec: str | None = None) -> Balance:
+def made_balance(
+    design: Design,
+    center: np.ndarray,
+    material: str,
+    settings: str,
+    spec: str | None = None,
+    *,
+    fill: Fill | None = None,
+    inertia: np.ndarray | None = None,
+) -> Balance:
     """Predict the die made of `material` with centre of mass `center` (model units) and compare.
 
     Parameters
@@ -109,13 +119,23 @@ def made_balance(design: Design, center: np.ndarray, material: str, settings: st
         The material's settings in words (for the messages).
     spec : str, optional
         How the user named the design (template name or path), for the command.
+    fill : Fill, optional
+        The made die's fill (default: `material` at its default settings).
+    inertia : (3, 3) float, optional
+        The made die's inertia tensor about its centre of mass over its
+        mass, model units² (default: the fill's, computed for `design`).
     """
-    from .models import MODELS, to_values
+    from .models import model_probabilities, to_values
 
     poly = design.polyhedron
     goal = design.target_distribution.aligned(design.support)
-    made = to_values(design, MODELS[MODEL](poly, np.asarray(center, dtype=float)))
-    own = to_values(design, MODELS[MODEL](poly, design.mass_properties().center))
+    fill = fill or Fill(material)
+    if inertia is None:
+        body = design.mass_properties(fill)
+        inertia = body.inertia / body.mass
+    made_body = MassProperties(1.0, np.asarray(center, dtype=float), np.asarray(inertia, dtype=float))
+    made = to_values(design, model_probabilities(MODEL, poly, made_body, fill))
+    own = to_values(design, model_probabilities(MODEL, poly, design.mass_properties(), design.fill))
     command = f"diefab optimize {spec or design.name} --fill {material} --model simulation"
     return Balance(
         model=MODEL,

@@ -86,7 +86,8 @@ def face_features(
         Centre of mass, model units.
     chain : (m,) float, optional
         The chain model's probabilities (default: with the module's constants;
-        a :class:`Correction` passes its own chain's).
+        a :class:`Correction` passes its own chain's).  The inertia terms are
+        the uniform solid's about `center`, as on the training dice.
 
     Returns
     -------
@@ -280,15 +281,19 @@ class Correction:
         out[resting] = e / e.sum()
         return out
 
-    def __call__(self, poly: Polyhedron, center: np.ndarray, chain: np.ndarray | None = None) -> np.ndarray:
+    def __call__(
+        self, poly: Polyhedron, center: np.ndarray, chain: np.ndarray | None = None, inertia: np.ndarray | None = None
+    ) -> np.ndarray:
         """(m,) float: the corrected probabilities of `poly` with its centre of mass at `center`.
 
-        `chain`, if given, must be the chain's probabilities with :attr:`chain`'s constants.
+        `chain`, if given, must be the chain's probabilities with :attr:`chain`'s
+        constants; `inertia` is the body's tensor about its centre of mass over
+        its mass, which the chain takes (the features take the uniform solid's).
         """
         from .fastmodel import landing_probabilities
 
         if chain is None:
-            chain = landing_probabilities(poly, center, **self.chain)
+            chain = landing_probabilities(poly, center, inertia=inertia, **self.chain)
         features, resting = face_features(poly, center, chain)
         return self.correct(chain, features, resting)
 
@@ -324,6 +329,9 @@ def packaged_correction() -> Correction:
     return Correction.from_json(resources.files("diefab").joinpath("data", CORRECTION_FILE).read_text())
 
 
-def corrected(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
-    """(m,) float: the chain model with the packaged correction (:func:`packaged_correction`)."""
-    return packaged_correction()(poly, center)
+def corrected(poly: Polyhedron, center: np.ndarray, *, inertia: np.ndarray | None = None) -> np.ndarray:
+    """(m,) float: the chain model with the packaged correction (:func:`packaged_correction`).
+
+    `inertia`: the body's inertia tensor about its centre of mass over its mass (default: the uniform solid's).
+    """
+    return packaged_correction()(poly, center, inertia=inertia)

@@ -82,10 +82,12 @@ import numpy as np
 from .errors import DesignError
 from .families import GEM, gem_parameters
 from .geometry import Polyhedron, face_margins, resting_faces, solid_angles
+from .mass import Fill
 
 __all__ = [
     "AREA_POWER",
     "DISCREPANCY_FILE",
+    "FILL_LAYERS",
     "HEIGHT_WEIGHT",
     "ROLL_POWER",
     "TAU",
@@ -93,6 +95,8 @@ __all__ = [
     "Discrepancy",
     "calibrate",
     "fast_model",
+    "fill_discrepancy",
+    "fill_discrepancy_file",
     "gem_discrepancy",
     "landing_probabilities",
     "roll_retention",
@@ -169,25 +173,28 @@ def tipping_barriers(poly: Polyhedron, center: np.ndarray) -> tuple[np.ndarray, 
     return barrier, share, _neighbors(poly)
 
 
-def roll_retention(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
+def roll_retention(poly: Polyhedron, center: np.ndarray, inertia: np.ndarray | None = None) -> np.ndarray:
     """(r,) float in [0, 1]: per directed edge, the kinetic-energy share a die keeps rolling over it.
 
     ``((k**2 + r**2 cos phi) / (k**2 + r**2)) ** 2`` (clipped at 0), with
     ``phi`` the angle between the normals of the edge's two faces, ``r`` the
     distance from ``center`` to the edge line and ``k**2`` the moment of
-    inertia of the uniform solid about the axis through ``center`` parallel
-    to the edge, over its volume.  The same on both sides of an edge.
+    inertia about the axis through ``center`` parallel to the edge, per unit
+    mass: of `inertia` (the body's tensor about its centre of mass over its
+    mass, model units²) if given, else of the uniform solid moved to
+    ``center``.  The same on both sides of an edge.
     """
-    from .mass import mass_properties
-
     center = np.asarray(center, dtype=float)
     tail, head, face, _ = poly._ring
-    props = mass_properties(poly)
-    shift = center - props.center  # parallel-axis theorem: inertia about `center`
-    inertia = props.inertia + props.mass * (shift @ shift * np.eye(3) - np.outer(shift, shift))
+    if inertia is None:
+        from .mass import mass_properties
+
+        props = mass_properties(poly)
+        shift = center - props.center  # parallel-axis theorem: inertia about `center`
+        inertia = (props.inertia + props.mass * (shift @ shift * np.eye(3) - np.outer(shift, shift))) / props.mass
     edge = poly.vertices[head] - poly.vertices[tail]
     edge /= np.linalg.norm(edge, axis=1)[:, None]
-    k2 = np.einsum("ij,jk,ik->i", edge, inertia, edge) / props.mass
+    k2 = np.einsum("ij,jk,ik->i", edge, np.asarray(inertia, dtype=float), edge)
     r2 = np.sum(np.cross(center - poly.vertices[tail], edge) ** 2, axis=1)
     cos = np.einsum("ij,ij->i", poly.normals[face], poly.normals[_neighbors(poly)])
     return np.clip((k2 + r2 * cos) / (k2 + r2), 0, None) ** 2
@@ -220,6 +227,7 @@ def landing_probabilities(
     area_power: float = AREA_POWER,
     roll_power: float = ROLL_POWER,
     height_weight: float = HEIGHT_WEIGHT,
+    inertia: np.ndarray | None = None,
 ) -> np.ndarray:
     """(m,) float: probability of coming to rest on each face (see the module docstring).
 
@@ -239,6 +247,9 @@ def landing_probabilities(
     height_weight : float
         Per model unit: the result is weighted by ``exp(-height_weight * h)``,
         h the height of the centre of mass resting on the face.
+    inertia : (3, 3) float, optional
+        The body's inertia tensor about its centre of mass over its mass,
+        model units² (:func:`roll_retention`); default the uniform solid's.
     """
     m = len(poly.faces)
     omega = solid_angles(poly, center)
@@ -255,7 +266,7 @@ def landing_probabilities(
     rate = np.clip(share[ok], 0, None) * np.exp(-np.clip(barrier[ok], 0, None) / temperature)
     rate *= (poly.areas[dest] / poly.areas[face[ok]]) ** area_power
     if roll_power:
-        rate *= np.maximum(roll_retention(poly, center)[ok], _TINY) ** roll_power
+        rate *= np.maximum(roll_retention(poly, center, inertia)[ok], _TINY) ** roll_power
     q = np.zeros((m, m))
     np.add.at(q, (face[ok], dest), rate)
     np.fill_diagonal(q, 0.0)
@@ -288,17 +299,32 @@ def _evolve(p0: np.ndarray, generator: np.ndarray) -> np.ndarray:
     return out
 
 
-def fast_model(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
+def fast_model(poly: Polyhedron, center: np.ndarray, *, fill: Fill | None = None,
+               inertia: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
     """(m,) float: the calibrated fast model (``MODELS["fast"]``).
 
-    The chain model (:func:`landing_probabilities`) with a learned
-    correction: for a gem inside the family box, the gem family's
-    discrepancy (:func:`gem_discrepancy`); for every other die, the per-face
-    logit correction learned from random dice of every family
+    The chain model (:func:`landing_probabilities`, with the body's
+    `inertia` if given) with a learned correction.  For a gem inside the
+    family box with every face stable, the gem family's discrepancy
+    (:func:`gem_discrepancy`), and for a gem made with a `fill` that has a
+    learned correction of its own (:func:`fill_discrepancy`: printed, or
+    card), that as well.  Every other die gets the per-face logit correction
+    learned from random dice of every family
     (:func:`diefab.correction.corrected`).  A gem is recognized by
-    :func:`~diefab.families.gem_parameters`: built by the gem family, not
-    the same shape given as a ``convex`` or ``mesh`` design, which gets the
+    :func:`~diefab.families.gem_parameters`: built by the gem family, not the
+    same shape given as a ``convex`` or ``mesh`` design, which gets the
     general correction.
+
+    Parameters
+    ----------
+    poly : Polyhedron
+    center : (3,) float
+        Centre of mass, model units.
+    fill : Fill, optional
+        How the die is made (default solid).
+    inertia : (3, 3) float, optional
+        Inertia tensor about the centre of mass over the mass, model units²
+        (default: the uniform solid's).
     """
     from .correction import corrected
 
@@ -306,8 +332,10 @@ def fast_model(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
     if params is not None:
         margins = face_margins(poly, center)
         if gem_discrepancy().covers(params, margins):
-            return gem_discrepancy().correct(landing_probabilities(poly, center), params, margins)
-    return corrected(poly, center)
+            p = gem_discrepancy().correct(landing_probabilities(poly, center, inertia=inertia), params, margins)
+            layer = fill_discrepancy(fill.kind) if fill is not None else None
+            return p if layer is None else layer.correct(p, params, margins)
+    return corrected(poly, center, inertia=inertia)
 
 
 # ---------------------------------------------------------------------------
@@ -367,6 +395,10 @@ class Discrepancy:
     physics_coordinates : bool
         Interpolate over the margins and chain probabilities as well as the
         parameters (default).
+    kernel : str
+        The RBF kernel (:class:`scipy.interpolate.RBFInterpolator`, its
+        least polynomial degree): ``thin_plate_spline`` (default) or, for a
+        correction learned from few designs, ``linear``.
     info : dict
         How the data were made: drops per design, physics version and
         settings, chain constants, cross-validated error.
@@ -382,6 +414,7 @@ class Discrepancy:
     smoothing: float
     physics_coordinates: bool = True
     info: dict = field(default_factory=dict)
+    kernel: str = "thin_plate_spline"
 
     #: One face of each mirror class (f1, f2, f5, f6, f7): the coordinates need no duplicates.
     CLASSES = (0, 1, 4, 5, 6)
@@ -398,6 +431,7 @@ class Discrepancy:
         smoothing: float,
         physics_coordinates: bool = True,
         info: Mapping | None = None,
+        kernel: str = "thin_plate_spline",
     ) -> Discrepancy:
         """The gem discrepancy from simulated `frequencies` (n, 9) at designs with parameters `points` (n, 5).
 
@@ -424,7 +458,7 @@ class Discrepancy:
         bounds = GEM.bounds(list(names))
         return cls(
             names, bounds[:, 0], bounds[:, 1], points, margins, chain, residuals, float(smoothing),
-            bool(physics_coordinates), dict(info or {}),
+            bool(physics_coordinates), dict(info or {}), str(kernel),
         )  # fmt: skip
 
     @classmethod
@@ -432,11 +466,12 @@ class Discrepancy:
         data = json.loads(text)
         arrays = [np.array(data[k], dtype=float) for k in ("lower", "upper", *cls._ARRAYS)]
         physics = bool(data.get("physics_coordinates", True))
-        return cls(tuple(data["parameters"]), *arrays, float(data["smoothing"]), physics, data["info"])
+        kernel = str(data.get("kernel", "thin_plate_spline"))
+        return cls(tuple(data["parameters"]), *arrays, float(data["smoothing"]), physics, data["info"], kernel)
 
     def to_json(self) -> str:
         """JSON text, one training design per line in each array (:meth:`from_json` reads it back)."""
-        head = {k: getattr(self, k) for k in ("parameters", "smoothing", "physics_coordinates", "info")}
+        head = {k: getattr(self, k) for k in ("parameters", "smoothing", "physics_coordinates", "info", "kernel")}
         head |= {"lower": self.lower.tolist(), "upper": self.upper.tolist()}
         body = json.dumps(head, indent=1, sort_keys=True)[:-2]
         for name in self._ARRAYS:
@@ -474,7 +509,7 @@ class Discrepancy:
         from scipy.interpolate import RBFInterpolator
 
         x = self._coordinates(self.points, self.margins, self.chain)
-        return RBFInterpolator(x, self.residuals, kernel="thin_plate_spline", smoothing=self.smoothing)
+        return RBFInterpolator(x, self.residuals, kernel=self.kernel, smoothing=self.smoothing)
 
     def __call__(self, params: Mapping[str, float], margins: np.ndarray, chain: np.ndarray) -> np.ndarray | None:
         """(m,) float: the learned residual of a design, or None outside the box.
@@ -522,6 +557,36 @@ class Discrepancy:
 def gem_discrepancy() -> Discrepancy:
     """The gem family's :class:`Discrepancy` packaged with diefab (read once)."""
     return Discrepancy.from_json(resources.files("diefab").joinpath("data", DISCREPANCY_FILE).read_text())
+
+
+#: The fills with a learned correction of their own, and the fill each was learned in (card: the thin shell).
+FILL_LAYERS = {"print": "print", "paper": "shell", "shell": "shell"}
+
+
+def fill_discrepancy_file(kind: str) -> str:
+    """Name of the packaged correction learned in the fill `kind` (a key of :data:`FILL_LAYERS`' values)."""
+    return f"gem-discrepancy-{kind}.json"
+
+
+def fill_discrepancy(kind: str) -> Discrepancy | None:
+    """The gem correction for dice made with a fill of `kind`, on top of :func:`gem_discrepancy`; None for none.
+
+    Learned like the gem discrepancy, from random stable gems simulated in
+    that fill, as the simulated frequencies minus the fast model without it
+    (the chain with the body's inertia, corrected by the solid gems'
+    discrepancy).  A printed die gets the print's correction; a card die,
+    paper or shell, the thin shell's (the card's thickness and its tabs
+    move the centre of mass, which the chain takes, and barely change the
+    inertia).  Learned at the fill's default settings (``info["fill"]``).
+    """
+    learned = FILL_LAYERS.get(kind)
+    return None if learned is None else _packaged_layer(learned)
+
+
+@cache
+def _packaged_layer(learned: str) -> Discrepancy | None:
+    path = resources.files("diefab").joinpath("data", fill_discrepancy_file(learned))
+    return Discrepancy.from_json(path.read_text()) if path.is_file() else None
 
 
 def calibrate(

@@ -25,13 +25,15 @@ import numpy as np
 from .design import Design
 from .errors import DesignError
 from .geometry import Polyhedron, RestBasins, resting_faces, solid_angles
-from .mass import Fill
+from .mass import Fill, MassProperties
 
 __all__ = [
+    "FILL_MODELS",
     "MODELS",
     "basin_shares",
     "basins_model",
     "face_probabilities",
+    "model_probabilities",
     "solid_angle_model",
     "to_values",
     "value_probabilities",
@@ -77,6 +79,8 @@ def basins_model(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
 from .fastmodel import fast_model  # noqa: E402 -- calibrated against pybullet
 
 MODELS: dict[str, Model] = {"solid-angle": solid_angle_model, "fast": fast_model, "basins": basins_model}
+#: Models that take the fill and the body's inertia (keywords ``fill`` and ``inertia``) as well.
+FILL_MODELS = {"fast"}
 
 
 def _model(name: str) -> Model:
@@ -86,10 +90,21 @@ def _model(name: str) -> Model:
         raise DesignError(f"unknown model {name!r} (models: {', '.join(MODELS)})") from None
 
 
+def model_probabilities(name: str, poly: Polyhedron, body: MassProperties, fill: Fill | None = None) -> np.ndarray:
+    """(m,) float: model `name` at a die made of `fill` whose mass properties are `body`.
+
+    Models in :data:`FILL_MODELS` are given the fill and the inertia as
+    well; the others see the centre of mass alone.
+    """
+    fn = _model(name)
+    if name in FILL_MODELS:
+        return fn(poly, body.center, fill=fill, inertia=body.inertia / body.mass)
+    return fn(poly, body.center)
+
+
 def face_probabilities(design: Design, model: str = "solid-angle", fill: Fill | None = None) -> np.ndarray:
     """(m,) float: probability of resting on each face, in face order."""
-    poly = design.polyhedron
-    return _model(model)(poly, design.mass_properties(fill).center)
+    return model_probabilities(model, design.polyhedron, design.mass_properties(fill), fill or design.fill)
 
 
 def to_values(design: Design, face_probs: np.ndarray) -> np.ndarray:

@@ -32,8 +32,8 @@ from .errors import DesignError
 from .families import family
 from .geometry import Polyhedron, face_margins
 from .mass import mass_properties
-from .models import MODELS
-from .readings import unreadable
+from .models import MODELS, model_probabilities
+from .readings import KINDS, unreadable
 from .stats import jsd, pearson_divergence, tvd
 
 __all__ = ["OBJECTIVES", "OptimizationResult", "Problem", "optimize_design"]
@@ -74,6 +74,10 @@ class Problem:
         Added to the model's face probabilities (then clipped at 0 and
         renormalized): simulated minus modelled frequencies at a nearby
         design, so that the model is corrected where the simulation was run.
+    read_by : tuple of str
+        The reading conventions a resting face may use
+        (:data:`diefab.readings.KINDS`; e.g. ``("face", "vertex")``: no value
+        read from an edge).
     """
 
     design: Design
@@ -82,6 +86,7 @@ class Problem:
     objective: str = "eq2"
     min_margin: float = 0.05
     correction: np.ndarray | None = None
+    read_by: tuple[str, ...] = KINDS
 
     def __post_init__(self) -> None:
         if self.model not in MODELS:
@@ -92,6 +97,8 @@ class Problem:
             raise DesignError(f"min_margin={self.min_margin} must be a non-negative number")
         if not self.names:
             raise DesignError(f"family {self.design.family!r} has no parameters to optimize")
+        if not self.read_by or set(self.read_by) - set(KINDS):
+            raise DesignError(f"read_by={list(self.read_by)} must be some of {', '.join(KINDS)}")
 
     @cached_property
     def bounds(self) -> np.ndarray:
@@ -118,9 +125,9 @@ class Problem:
             poly = _polyhedron(design, params)
         except DesignError:
             return INVALID, np.full(len(design.support), np.nan), np.full(len(design.values), -np.inf)
-        center = mass_properties(poly, design.fill, mm_per_unit=design.mm_per_unit, tabs=self._tabs).center
-        margins = face_margins(poly, center)
-        probs = MODELS[self.model](poly, center)
+        body = mass_properties(poly, design.fill, mm_per_unit=design.mm_per_unit, tabs=self._tabs)
+        margins = face_margins(poly, body.center)
+        probs = model_probabilities(self.model, poly, body, design.fill)
         if self.correction is not None:
             probs = np.clip(probs + self.correction, 0.0, None)
             probs = probs / probs.sum()
@@ -152,7 +159,7 @@ class Problem:
 
     def _readable(self, poly: Polyhedron) -> bool:
         """True if every resting face can be read (:mod:`diefab.readings`; hand-set labels excepted)."""
-        return unreadable(poly, self.design.values, tuple(self.design.labels)) is None
+        return unreadable(poly, self.design.values, tuple(self.design.labels), self.read_by) is None
 
     @cached_property
     def _tabs(self):
@@ -224,6 +231,7 @@ def optimize_design(
     max_evaluations: int = 4000,
     correction: np.ndarray | None = None,
     deadline: float | None = None,
+    read_by: Sequence[str] = KINDS,
 ) -> OptimizationResult:
     """Multi-start Nelder--Mead over the family's parameters.
 
@@ -232,7 +240,7 @@ def optimize_design(
     design : Design
         Starting design: family, values, target, fill; its own parameters are
         one of the starts.
-    model, objective, min_margin, correction
+    model, objective, min_margin, correction, read_by
         See :class:`Problem`.
     names : sequence of str, optional
         Parameters to optimize; default the family's free ones for this die
@@ -265,7 +273,7 @@ def optimize_design(
     fam = family(design.family)
     if names is None:
         names = fam.free_names(design.params)
-    problem = Problem(design, tuple(names), model, objective, min_margin, correction)
+    problem = Problem(design, tuple(names), model, objective, min_margin, correction, tuple(read_by))
     rng = np.random.default_rng(seed)
     x0s = [problem.unit(fam.complete(design.params)), *rng.random((starts, len(names)))]
     evaluations = 0

@@ -35,7 +35,7 @@ import numpy as np
 from .errors import DesignError
 from .geometry import Polyhedron
 
-__all__ = ["FACE_ANGLE", "Marking", "Reading", "markings", "readings", "unreadable"]
+__all__ = ["FACE_ANGLE", "KINDS", "Marking", "Reading", "markings", "readings", "unreadable"]
 
 #: Largest angle (degrees) between straight up and a face that is read as "the face on top".
 FACE_ANGLE = 40.0
@@ -111,11 +111,19 @@ def _is_edge(poly: Polyhedron, v: int, w: int) -> bool:
     return bool(np.any(np.all(poly.edges == sorted((v, w)), axis=1)))
 
 
-def unreadable(poly: Polyhedron, values: Mapping[str, int], labelled: Sequence[str] = ()) -> str | None:
+#: The reading conventions, in the order :func:`readings` tries them.
+KINDS = ("face", "vertex", "edge")
+
+
+def unreadable(
+    poly: Polyhedron, values: Mapping[str, int], labelled: Sequence[str] = (), read_by: Sequence[str] = KINDS
+) -> str | None:
     """Why `poly` with these resting-face `values` cannot be read, or None when it can.
 
     Faces in `labelled` have their text set by hand (a design's ``labels``):
-    two resting faces may share such a face on top.
+    two resting faces may share such a face on top.  `read_by` lists the
+    conventions allowed (a subset of :data:`KINDS`): a die whose net marks
+    only faces and the apex is designed with ``("face", "vertex")``.
     """
     found = readings(poly)
     where: dict[tuple, str] = {}
@@ -123,6 +131,8 @@ def unreadable(poly: Polyhedron, values: Mapping[str, int], labelled: Sequence[s
         r = found[poly.face_index(name)]
         if r is None:
             return f"resting on {name}, neither a face, a vertex nor an edge clearly points up"
+        if r.kind not in read_by:
+            return f"resting on {name}, it is read from {'an' if r.kind[0] in 'ae' else 'a'} {r.kind}"
         if r.kind == "face" and poly.names[r.face] in labelled:
             continue
         other = where.setdefault(r.place, name)

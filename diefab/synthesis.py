@@ -48,7 +48,7 @@ from .errors import DesignError
 from .families import family as get_family
 from .geometry import resting_faces
 from .mass import Fill, mass_properties
-from .models import MODELS, value_probabilities
+from .models import MODELS, model_probabilities, value_probabilities
 from .optimize import INFEASIBLE, optimize_design
 from .readings import unreadable
 from .stats import pearson_divergence, tvd
@@ -225,7 +225,8 @@ def _start(candidate: Candidate, target: Target, name: str, fill: Fill, size_mm:
     prism's caps), unless that leaves fewer faces than values.
     """
     poly = candidate.polyhedron()
-    center = mass_properties(poly, fill).center
+    # the values are assigned from the solid's balance: a made fill's needs the die's size, set below
+    center = mass_properties(poly).center
     resting = resting_faces(poly, center)
     if resting.sum() < len(target.values):  # too few: every face gets a value, the optimizer makes them rest
         resting[:] = True
@@ -380,7 +381,7 @@ def _two_class_design(
 
     def model_share(value: float) -> float:
         d = build(value)
-        return float(MODELS[rank](d.polyhedron, d.mass_properties().center)[: plan.n].sum())
+        return float(model_probabilities(rank, d.polyhedron, d.mass_properties(), d.fill)[: plan.n].sum())
 
     start = plan.params[[k for k in plan.params if k != "n"][0]]
     grid = np.linspace(lo, hi, 81)
@@ -486,8 +487,8 @@ def _refine(
             out.design, out.objective, out.predicted = design, objective, predicted
         if distance < REFINE_GOAL or time.monotonic() > deadline:
             break
-        center = design.mass_properties().center
-        correction = sim.face_probabilities - MODELS[RANK_MODEL](design.polyhedron, center)
+        body = design.mass_properties()
+        correction = sim.face_probabilities - model_probabilities(RANK_MODEL, design.polyhedron, body, design.fill)
         try:
             # leave time for the next simulation, which judges this step
             stop = max(time.monotonic() + MIN_STEP_SECONDS, deadline - per_drop * REFINE_DROPS)

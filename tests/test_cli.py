@@ -150,10 +150,15 @@ def test_unwritable_output_folder_even_for_root(bad):
     assert "cannot create output folder /proc/diefab-out" in line
 
 
-def test_fast_model_on_a_non_solid_gem_says_it_extrapolates(run):
-    code, out, err = run("predict", "fudge-gem", "--model", "fast", "--fill", "shell", "--json")
+def test_fast_model_on_a_fill_without_its_correction_says_it_extrapolates(run):
+    from diefab.fastmodel import fill_discrepancy
+
+    assert fill_discrepancy("print") is None  # the print fill has no correction of its own yet
+    code, out, err = run("predict", "fudge-gem", "--model", "fast", "--fill", "print", "--json")
     assert code == 0
-    assert json.loads(out)["fill"] == "shell"
+    assert json.loads(out)["fill"] == "print"
     assert "learned on solid gems" in err and len(err.strip().splitlines()) == 1
+    code, _, err = run("predict", "fudge-gem", "--model", "fast", "--fill", "shell")
+    assert code == 0 and "learned on solid gems" not in err  # the card fills have theirs
     code, _, err = run("predict", "fudge-gem", "--model", "fast")
     assert code == 0 and "learned on solid gems" not in err

@@ -35,10 +35,13 @@ def _json_default(obj: Any):
 
 def note_fast_fill(d: Design, model: str, fill: str) -> None:
     """One line on stderr when the fast model's gem correction would be extrapolated to another fill."""
-    if model == "fast" and d.family == "gem" and fill != "solid":
+    from ..fastmodel import fill_discrepancy
+
+    if model == "fast" and d.family == "gem" and fill != "solid" and fill_discrepancy(fill) is None:
         click.echo(
-            f"diefab: note: the fast model's gem correction was learned on solid gems; with a {fill} fill it is an "
-            "extrapolation (README: the fast model), so check the die with diefab validate",
+            f"diefab: note: the fast model's gem correction was learned on solid gems and has none learned for a "
+            f"{fill} fill, so there it is an extrapolation (README: the fast model); check the die with "
+            "diefab validate",
             err=True,
         )
 
@@ -325,11 +328,10 @@ def paper_balance(design: Design, net, spec: str, **card):
     base = design if design.fill.kind == "paper" else apply_fill(design, "paper")
     fill = apply_fill(base, None, **card).fill
     props = mass_properties(net.poly, fill, mm_per_unit=net.mm_per_unit, tabs=net_tab_shapes(net))
-    center = props.center
-    if design.center_of_mass is not None:  # a stated centre of mass overrides the card's
-        center = design.mass_properties(fill).center
+    if design.center_of_mass is not None or design.inertia is not None:  # stated ones override the card's
+        props = design.mass_properties(fill)
     words = f"{fill.card_g_m2:g} g/m² card with {len(net.tabs)} glue tabs"
-    return made_balance(design, center, "paper", words, spec)
+    return made_balance(design, props.center, "paper", words, spec, fill=fill, inertia=props.inertia / props.mass)
 
 
 def print_balance(design: Design, solid, fill, spec: str):
@@ -338,4 +340,5 @@ def print_balance(design: Design, solid, fill, spec: str):
 
     r = solid.report
     center = np.asarray(r["center_of_mass_mm"]["printed"]) / r["mm_per_unit"]
-    return made_balance(design, center, "print", fill.describe(), spec)
+    body = design.mass_properties(fill)  # the inertia of the design's own print body (labels as stl engraves)
+    return made_balance(design, center, "print", fill.describe(), spec, fill=fill, inertia=body.inertia / body.mass)

@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from .common import console, emit_json, json_option, out_option
+from .common import FILL_OPTIONS, console, emit_json, fill_options, json_option, out_option
 
 _METHOD = {
     "fair": "a fair die, its faces counted out to the target",
@@ -27,8 +27,7 @@ def _slug(text: str) -> str:
 @click.option("--faces", type=click.IntRange(2, 120), default=None, help="Resting faces of the die (default: chosen).")
 @click.option("--family", "family_name", default="auto", show_default=True,
               help="Die family (ngem, prism, bipyramid, trapezohedron, cuboid, freeform, gem) or auto.")  # fmt: skip
-@click.option("--fill", type=click.Choice(["solid", "shell", "print"]), default="solid", show_default=True,
-              help="How the die is filled (its centre of mass).")  # fmt: skip
+@fill_options("paper", "print")
 @click.option("--model", type=click.Choice(["fast", "solid-angle", "basins", "simulation"]), default="simulation",
               show_default=True,
               help="Model optimized; simulation refines the fast model's die against pybullet drops.")  # fmt: skip
@@ -45,13 +44,14 @@ def _slug(text: str) -> str:
 @click.option("--workers", type=click.IntRange(1, 256), default=None, help="Worker processes (default all cores).")
 @out_option
 @json_option
-def design(target, faces, family_name, fill, model, budget, name, seed, size_mm, min_margin, validate_sims, workers,
-           out_dir, as_json) -> None:  # fmt: skip
+def design(target, faces, family_name, model, budget, name, seed, size_mm, min_margin, validate_sims, workers,
+           out_dir, as_json, fill_kind, **fill_settings) -> None:  # fmt: skip
     """Design a die that rolls like TARGET (2d6, 3dF, binomial:4, uniform:3, 1:3,2:3,...).
 
     Picks a family and face count that can carry the target's values,
     assigns values to faces, optimizes the shape, checks it by simulation on
-    a fresh seed, and writes OUT/NAME.toml.
+    a fresh seed, and writes OUT/NAME.toml.  With --fill paper or print (and
+    their settings) the die is designed as it will be made.
     """
     from dataclasses import replace
 
@@ -65,6 +65,8 @@ def design(target, faces, family_name, fill, model, budget, name, seed, size_mm,
 
     t0 = time.monotonic()
     goal = parse_target(target)
+    changes = {FILL_OPTIONS[k][0]: v for k, v in fill_settings.items() if v is not None}
+    made = Fill(kind=fill_kind or "solid", **changes)  # a setting out of range: DesignError, one line
     if not (np.isfinite(budget) and budget > 0):
         raise click.BadParameter(f"{budget} must be a positive number of minutes", param_hint="--budget")
     if not (np.isfinite(size_mm) and size_mm > 0):
@@ -78,7 +80,7 @@ def design(target, faces, family_name, fill, model, budget, name, seed, size_mm,
     err = console(stderr=True)
     say = (lambda text: err.print(text)) if not as_json else None
     found = synthesize(
-        goal, faces=faces, family=family, fill=Fill(kind=fill), model=model, budget_seconds=budget * 60, seed=seed,
+        goal, faces=faces, family=family, fill=made, model=model, budget_seconds=budget * 60, seed=seed,
         name=name or "die", size_mm=size_mm, min_margin=min_margin, workers=workers, progress=say,
     )  # fmt: skip
     d = replace(
@@ -89,7 +91,11 @@ def design(target, faces, family_name, fill, model, budget, name, seed, size_mm,
     )
     path = atomic_write(
         output_path(out_dir, d.name, ".toml"),
-        design_to_toml(d, comment=f"Written by: diefab design {target} --model {model} --seed {seed}"),
+        design_to_toml(
+            d,
+            comment=f"Written by: diefab design {target} --model {model} --seed {seed}"
+            + (f" --fill {made.kind}" if made.kind != "solid" else ""),
+        ),  # fmt: skip
     )
     aligned = goal.aligned(d.support)
     validated = None
