@@ -23,6 +23,7 @@ BENCHMARKS = {
     "bench_stl.py": ([], ["--repeat", "3"]),
     "bench_validate.py": ([], ["--n", "3000"]),
     "bench_fastmodel.py": ([], ["--designs", "4", "--drops", "3000"]),
+    "bench_families.py": (["--designs", "4", "--drops", "3000"], ["--designs", "1", "--drops", "500"]),
     "bench_simopt.py": ([], ["--budget", "1", "--validate", "3000"]),
     "bench_calibrate.py": (
         [],
