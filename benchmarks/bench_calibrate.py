@@ -1,51 +1,81 @@
 """Leave-one-die-out prediction of real dice: default physics, calibrated physics, models, the source's own.
 
-    nice -n 10 python benchmarks/bench_calibrate.py                 # the full run (13 min on 2 shared cores)
-    python benchmarks/bench_calibrate.py --drops 200 --candidates 3  # a quick one
+    nice -n 10 python benchmarks/bench_calibrate.py --workers 1    # the full run (about 20 minutes, 2 shared cores)
+    python benchmarks/bench_calibrate.py --drops 200 --candidates 3 --slow-drops 60 --predict-drops 200  # a quick one
 
 The dice: the paper's die as made (the gem a=1.18 b=0.52 c=0.72 d=1.41 as
 a paper model, i.e. a shell fill) with its 405 real rolls (Table 2), and
-every die of ``/work/shared/realrolls`` (or ``--realrolls FOLDER``) that
-:func:`diefab.calibrate.realrolls_die` can read.
+every die of ``/work/shared/realrolls`` (or ``--realrolls FOLDER``): the
+printed prisms and the figurine d3s, read by
+:func:`diefab.calibrate.realrolls_die` (hull, stated centre of mass and
+inertia).
 
-Calibration, affordable on a shared 2-core machine: a fixed set of
-candidate physics settings (the defaults and ``--candidates`` scrambled
-Sobol points in the box of restitution, friction, spin and drop height that
-``diefab calibrate`` searches) is simulated once per die with common random
-numbers (``--drops`` drops each, the same seed).  For each held-out die the
-calibrated setting is the candidate with the least deviance summed over the
-*other* dice (the objective of ``diefab calibrate``); the held-out die is
-then predicted by that candidate's simulation.  The in-sample fit (the
-candidate best over all dice) is printed beside it, as the optimistic bound.
+Calibration, affordable on a shared 2-core machine:
+
+1. Every die is dropped at the same candidate settings: the defaults and
+   ``--candidates`` scrambled Sobol points in the box of restitution,
+   friction, spin and drop height that ``diefab calibrate`` searches, with
+   common random numbers (one seed; ``--drops`` drops per die and candidate,
+   ``--slow-drops`` for dice of more than 50 hull faces, whose drops cost
+   several times more).  Dice with the same design (binom3 on wood and on
+   stone) share their simulations.
+2. Per die, a response surface (:func:`diefab.calibrate.fit_surface`, a
+   multinomial logistic regression quadratic in the settings) pools all
+   candidates' counts into smooth value probabilities over the whole box.
+3. For each held-out die the calibrated setting minimizes the deviance of
+   the *other* dice's real counts under their surfaces plus a normal prior
+   toward the default physics (``--prior`` standard deviations, in units of
+   each parameter's range; fixed before any result was seen)
+   (:func:`diefab.calibrate.fit_settings`).
+4. The held-out die is then dropped afresh at its calibrated setting
+   (``--predict-drops`` drops, seed ``--predict-seed``, never used in
+   fitting), and so is every die at the default physics.
 
 Printed per die, as TVD to the real frequencies (mirror-image outcomes
-compared up to relabelling): default physics, leave-one-out calibrated
-physics, in-sample calibrated, the solid-angle model, ``--model fast`` and
-``basins`` where they apply, the source's own quasi-static model (``ours``)
-and Bullet simulation (``bullet``), and the TVD sampling noise alone gives
-at the die's number of rolls (Monte-Carlo at the observed frequencies).
+compared up to relabelling): default physics; leave-one-out calibrated
+physics (fresh drops; and its surface's value); the same without the prior
+and the best single candidate (surface values, for comparison); the
+in-sample fit (all dice, the optimistic bound); the solid-angle, fast and
+basins models; the source's own quasi-static model (``ours``) and Bullet
+and IPC simulations; and the TVD sampling noise alone gives at the die's
+number of rolls (Monte-Carlo at the observed frequencies).  Then which
+parameters the fit leans on.
 
-Simulated counts are cached in ``--cache`` (one JSON line per die and
-candidate), so an interrupted run continues where it stopped.
+Simulated counts are cached in ``--cache`` (one JSON line per design,
+setting, drop count and seed), so an interrupted run continues where it
+stopped; the table is also written as JSON (``--json``).
 """
 
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import time
 from pathlib import Path
 
 import numpy as np
 
-from diefab.calibrate import RealDie, deviance, make_spec, realrolls_die, simulate_die, smoothed
-from diefab.design import parse_design
+from diefab.calibrate import (
+    RealDie,
+    deviance,
+    fit_settings,
+    fit_surface,
+    make_spec,
+    prior_penalty,
+    realrolls_die,
+    simulate_die,
+    smoothed,
+)
+from diefab.design import design_to_toml, parse_design
 from diefab.errors import DiefabError
 from diefab.physics import shutdown_pool
+from diefab.realrolls import grouped_tvd as grouped
 
 HERE = Path(__file__).parent
 TABLE_2 = np.array([0, 20, 48, 80, 89, 83, 66, 17, 2])  # the paper's real rolls, values -4..4
 FREE = ("restitution", "friction", "spin", "drop_height")
+SLOW_FACES = 50  # dice with more hull faces than this drop --slow-drops times per candidate
 PAPER_DIE = """
 name = "paper-gem"
 description = "the paper's die as made: a paper model (shell) of the gem a=1.18 b=0.52 c=0.72 d=1.41"
@@ -64,87 +94,23 @@ kind = "shell"
 
 def load_dice(folder: Path) -> list[RealDie]:
     dice = [RealDie("paper-gem", parse_design(PAPER_DIE, source="paper die"), TABLE_2)]
-    try:
-        import diefab.realrolls  # noqa: F401
-    except ImportError:
-        reader = convex_die
-        print("diefab.realrolls is missing: reading the convex dice of the data as plain hulls (figurines skipped)")
-    else:
-        reader = realrolls_die
     for path in sorted(folder.glob("*.json")):
         try:
-            dice.append(reader(path))
-        except (DiefabError, ImportError) as exc:
+            dice.append(realrolls_die(path))
+        except DiefabError as exc:
             print(f"skipped {path.name}: {exc}")
     return dice
 
 
-def convex_die(path: Path) -> RealDie:
-    """A convex die of the real-rolls data as a hull with a uniform solid body (no stated centre of mass).
-
-    A stand-in for :func:`diefab.calibrate.realrolls_die` on a diefab without
-    the real-rolls reader: each resting face of the hull takes the outcome of
-    the data's triangle in its plane; the other faces are transitional.
-    """
-    from diefab.design import Design
-    from diefab.geometry import Polyhedron, resting_faces
-    from diefab.mass import Fill, mass_properties
-
-    data = json.loads(path.read_text())
-    if "mesh_vertices" in data["geometry"]:
-        raise DiefabError("a non-convex figurine needs the stated centre of mass of diefab.realrolls")
-    v = np.array(data["geometry"]["hull_vertices"], dtype=float)
-    scale = 2.0 / float(np.ptp(v, axis=0).max())
-    poly = Polyhedron.from_points(v * scale)
-    tri = np.array(data["geometry"]["hull_faces"])
-    outcome_of = {t: int(o) for o, faces in data["outcome_faces"].items() for t in faces}
-    tv = v[tri] * scale
-    normals = np.cross(tv[:, 1] - tv[:, 0], tv[:, 2] - tv[:, 0])
-    normals /= np.linalg.norm(normals, axis=1)[:, None]
-    rest = resting_faces(poly, mass_properties(poly, Fill()).center)
-    values = {}
-    for f in np.flatnonzero(rest):
-        near = np.abs(tv.mean(axis=1) @ poly.normals[f] - poly.offsets[f]) < 1e-6
-        t = int(np.argmax(np.where(near, normals @ poly.normals[f], -2)))
-        values[poly.names[f]] = outcome_of[t]
-    outcomes = [int(o) for o in data["physical"]["outcomes"]]
-    design = Design(path.stem, "convex", vertices=tuple(map(tuple, (v * scale).tolist())), values=values,
-                    transitional=tuple(n for k, n in enumerate(poly.names) if not rest[k]),
-                    target=",".join(f"{o}:1" for o in outcomes), size_mm=float(np.ptp(v, axis=0).max()))  # fmt: skip
-    index = {o: i for i, o in enumerate(design.support)}
-    order = [index[o] for o in outcomes]
-    counts = np.zeros(len(index), dtype=np.int64)
-    counts[order] = data["physical"]["counts"]
-    ref = {}
-    for k in ("ours", "bullet"):
-        r = np.zeros(len(index))
-        r[order] = data["their_model_and_sims"][k]
-        ref[k] = r
-    groups = tuple(tuple(index[int(o)] for o in g) for g in data.get("ambiguous_groups", []))
-    return RealDie(path.stem, design, counts, groups, ref)
-
-
 def fingerprint(die: RealDie) -> str:
-    """A short hash of the die's design: a cached simulation is reused only for the same die."""
-    import hashlib
-
-    from diefab.design import design_to_toml
-
+    """A short hash of the die's design: the same design shares its simulations, a changed one is simulated anew."""
     return hashlib.sha256(design_to_toml(die.design).encode()).hexdigest()[:16]
 
 
 def grouped_tvd(die: RealDie, p: np.ndarray) -> float:
     """TVD of `p` to the die's real frequencies, the least over relabellings within its groups."""
-    from itertools import permutations, product
-
-    q = die.frequencies
-    best = np.inf
-    for perms in product(*(permutations(g) for g in die.groups)):
-        order = np.arange(len(p))
-        for g, perm in zip(die.groups, perms):
-            order[list(g)] = perm
-        best = min(best, 0.5 * float(np.abs(np.asarray(p)[order] - q).sum()))
-    return best
+    idx = range(len(p))
+    return grouped(p, die.frequencies, idx, die.groups)
 
 
 def noise_tvd(die: RealDie, samples: int = 4000, seed: int = 0) -> float:
@@ -165,104 +131,182 @@ def model_probabilities(die: RealDie, model: str) -> np.ndarray | None:
         return None
 
 
+class Simulations:
+    """Simulated value counts of the dice, cached by design, setting, drop count and seed."""
+
+    def __init__(self, path: Path, workers: int) -> None:
+        self.path, self.workers, self.table, self.dropped, self.seconds = path, workers, {}, 0, 0.0
+        if path.is_file():
+            for line in path.read_text().splitlines():
+                try:
+                    r = json.loads(line)
+                    self.table[(r["design"], tuple(r["values"]), r["drops"], r["seed"])] = r["counts"]
+                except (ValueError, KeyError):
+                    continue
+        path.parent.mkdir(parents=True, exist_ok=True)
+
+    def counts(self, die: RealDie, spec, x: np.ndarray, drops: int, seed: int) -> np.ndarray:
+        values = tuple(round(float(v), 9) for v in spec.values(x))
+        key = (fingerprint(die), values, int(drops), int(seed))
+        if key not in self.table:
+            r = simulate_die(die, spec.settings(x), int(drops), int(seed), self.workers)
+            self.table[key] = r["counts"]
+            self.dropped += int(drops)
+            self.seconds += r["seconds"]
+            with self.path.open("a") as log:
+                log.write(json.dumps({"die": die.name, "design": key[0], "values": list(values), "drops": key[2],
+                                      "seed": key[3], "counts": r["counts"]}) + "\n")  # fmt: skip
+        return np.array(self.table[key], dtype=float)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--drops", type=int, default=800, help="drops per die and candidate")
-    parser.add_argument("--candidates", type=int, default=11, help="Sobol candidates besides the defaults")
-    parser.add_argument("--seed", type=int, default=0, help="physics seed (common random numbers)")
-    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--drops", type=int, default=300, help="drops per die and candidate")
+    parser.add_argument("--slow-drops", type=int, default=60, help=f"the same, dice of more than {SLOW_FACES} faces")
+    parser.add_argument("--candidates", type=int, default=16, help="Sobol candidates besides the defaults")
+    parser.add_argument("--prior", type=float, default=0.25,
+                        help="prior sd toward the defaults, in parameter ranges (inf: none)")  # fmt: skip
+    parser.add_argument("--predict-drops", type=int, default=2000, help="fresh drops of each prediction")
+    parser.add_argument("--seed", type=int, default=0, help="physics seed of the candidates (common random numbers)")
+    parser.add_argument("--predict-seed", type=int, default=1, help="physics seed of the predictions")
+    parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--realrolls", type=Path, default=Path("/work/shared/realrolls"))
-    parser.add_argument("--cache", type=Path, default=HERE / "results" / "calibrate_cache.jsonl")
+    parser.add_argument("--cache", type=Path, default=HERE / "results" / "calibrate_loo_cache.jsonl")
+    parser.add_argument("--json", type=Path, default=None, help="also write the table as JSON to this file")
     args = parser.parse_args()
     from scipy.stats import qmc
 
     dice = load_dice(args.realrolls)
     spec = make_spec(dice, free=FREE)
+    x0 = np.array(spec.x0)
     m = max(int(np.ceil(np.log2(max(args.candidates, 1)))), 0)  # whole powers of 2 keep Sobol's balance
     points = qmc.Sobol(len(FREE), scramble=True, seed=args.seed).random_base2(m)[: args.candidates]
-    xs = [np.array(spec.x0)] + list(points)
-    cands = [spec.settings(x) for x in xs]
+    xs = np.vstack([x0, points])
+    faces = [len(d.design.polyhedron.names) for d in dice]
+    drops = [args.slow_drops if f > SLOW_FACES else args.drops for f in faces]
     print(f"{len(dice)} dice, {len(xs)} candidates (defaults + {args.candidates} Sobol points in "
-          f"{', '.join(f'{n} [{lo:g}, {hi:g}]' for n, (lo, hi) in zip(FREE, spec.bounds))}), "
-          f"{args.drops} drops per die and candidate, seed {args.seed}, {args.workers} workers")  # fmt: skip
+          f"{', '.join(f'{n} [{lo:g}, {hi:g}]' for n, (lo, hi) in zip(FREE, spec.bounds))}); "
+          f"{args.drops} drops per die and candidate ({args.slow_drops} for dice of more than {SLOW_FACES} faces), "
+          f"seed {args.seed}; predictions {args.predict_drops} drops, seed {args.predict_seed}; prior sd "
+          f"{args.prior:g} of each range; {args.workers} workers", flush=True)  # fmt: skip
 
-    cache: dict[tuple, list[int]] = {}
-    if args.cache.exists():
-        for line in args.cache.read_text().splitlines():
-            try:
-                r = json.loads(line)
-                cache[(r["die"], r["design"], tuple(np.round(r["x"], 9)), r["drops"], r["seed"])] = r["counts"]
-            except (ValueError, KeyError):
-                continue
-    args.cache.parent.mkdir(parents=True, exist_ok=True)
-    counts = np.zeros((len(dice), len(xs)), dtype=object)
-    started, simulated = time.perf_counter(), 0
-    with args.cache.open("a") as log:
-        for j, (x, settings) in enumerate(zip(xs, cands)):
-            for i, die in enumerate(dice):
-                key = (die.name, fingerprint(die), tuple(np.round(x, 9)), args.drops, args.seed)
-                if key not in cache:
-                    r = simulate_die(die, settings, args.drops, args.seed, args.workers)
-                    cache[key] = r["counts"]
-                    simulated += args.drops
-                    log.write(json.dumps({"die": die.name, "design": key[1], "x": list(key[2]), "drops": args.drops,
-                                          "seed": args.seed, "counts": r["counts"]}) + "\n")  # fmt: skip
-                    log.flush()
-                counts[i, j] = np.array(cache[key])
-            print(f"  candidate {j}: " + " ".join(f"{n}={v:.3g}" for n, v in zip(FREE, spec.values(x)))
-                  + f"  ({time.perf_counter() - started:.0f} s)", flush=True)  # fmt: skip
-    shutdown_pool()
-    seconds = time.perf_counter() - started
-
-    dev = np.array([[deviance(d.counts, d.symmetrized(smoothed(counts[i, j]))) for j in range(len(xs))]
-                    for i, d in enumerate(dice)])  # fmt: skip
-    everywhere = int(np.argmin(dev.sum(axis=0)))
-    rows, picks = [], []
+    sims = Simulations(args.cache, args.workers)
+    started = time.perf_counter()
+    counts = []
     for i, die in enumerate(dice):
-        train = np.delete(dev, i, axis=0).sum(axis=0)
-        pick = int(np.argmin(train))
-        picks.append(pick)
+        counts.append(np.array([sims.counts(die, spec, x, drops[i], args.seed) for x in xs]))
+        print(f"  {die.name}: {len(xs)} candidates x {drops[i]} drops  ({time.perf_counter() - started:.0f} s)",
+              flush=True)  # fmt: skip
+    surfaces = [fit_surface(xs, c) for c in counts]
 
-        def sim(j: int, die=die, i=i) -> np.ndarray:
-            c = counts[i, j].astype(float)
+    def surface_tvd(i: int, x: np.ndarray) -> float:
+        return grouped_tvd(dice[i], dice[i].symmetrized(surfaces[i].probabilities(x)))
+
+    # how closely each surface follows its own candidates, against the simulation noise of one candidate
+    fit_rows = []
+    for i, die in enumerate(dice):
+        sim = counts[i] / counts[i].sum(axis=1, keepdims=True)
+        emu = surfaces[i].probabilities(xs)
+        gaps = 0.5 * np.abs(sim - emu).sum(axis=1)
+        expected = np.mean([np.sum(np.sqrt(p * (1 - p) / (2 * np.pi * drops[i]))) for p in emu])
+        fit_rows.append((die.name, float(np.mean(gaps)), float(expected)))
+
+    dev = np.array([[deviance(d.counts, d.symmetrized(smoothed(counts[i][j]))) for j in range(len(xs))]
+                    for i, d in enumerate(dice)])  # fmt: skip
+
+    def calibrate(train: list[int], sigma: float) -> np.ndarray:
+        order = np.argsort(dev[train].sum(axis=0))[:3]
+        x, _ = fit_settings([dice[i] for i in train], [surfaces[i] for i in train], x0, sigma=sigma,
+                            starts=[xs[j] for j in order])  # fmt: skip
+        return x
+
+    everyone = list(range(len(dice)))
+    x_all = calibrate(everyone, args.prior)
+    rows, fitted = [], []
+    for i, die in enumerate(dice):
+        train = [j for j in everyone if j != i]
+        x_loo = calibrate(train, args.prior)
+        x_free = calibrate(train, np.inf)
+        pick = int(np.argmin(dev[train].sum(axis=0)))
+        fitted.append(x_loo)
+
+        def fresh(x: np.ndarray, die=die) -> np.ndarray:
+            c = sims.counts(die, spec, x, args.predict_drops, args.predict_seed)
             return die.symmetrized(c / max(c.sum(), 1))
 
         row = {
             "die": die.name,
             "rolls": die.n,
             "noise": noise_tvd(die),
-            "default": grouped_tvd(die, sim(0)),
-            "loo": grouped_tvd(die, sim(pick)) if len(dice) > 1 else None,
-            "in-sample": grouped_tvd(die, sim(everywhere)),
+            "default": grouped_tvd(die, fresh(x0)),
+            "loo": grouped_tvd(die, fresh(x_loo)),
+            "loo-surface": surface_tvd(i, x_loo),
+            "no-prior": surface_tvd(i, x_free),
+            "candidate": grouped_tvd(die, die.symmetrized(counts[i][pick] / counts[i][pick].sum())),
+            "in-sample": surface_tvd(i, x_all),
         }
         for model in ("solid-angle", "fast", "basins"):
             p = model_probabilities(die, model)
             row[model] = None if p is None else grouped_tvd(die, p)
-        for ref in ("ours", "bullet"):
+        for ref in ("ours", "bullet", "ipc"):
             row[ref] = grouped_tvd(die, die.reference[ref]) if ref in die.reference else None
+        row["settings"] = dict(zip(FREE, spec.values(x_loo).round(4).tolist()))
         rows.append(row)
+        print(f"  held out {die.name}: " + " ".join(f"{n}={v:.3g}" for n, v in row["settings"].items())
+              + f"  ({time.perf_counter() - started:.0f} s)", flush=True)  # fmt: skip
+    shutdown_pool()
+    seconds = time.perf_counter() - started
 
-    cols = ["noise", "default", "loo", "in-sample", "solid-angle", "fast", "basins", "ours", "bullet"]
-    print(f"\nTVD to the real frequencies ({simulated:,} drops simulated in {seconds:.0f} s on a shared machine)")
-    print(f"{'die':<14}{'rolls':>6}" + "".join(f"{c:>12}" for c in cols) + "   LOO pick")
-    for row, pick in zip(rows, picks):
+    cols = ["noise", "default", "loo", "loo-surface", "no-prior", "candidate", "in-sample", "solid-angle", "fast",
+            "basins", "ours", "bullet", "ipc"]  # fmt: skip
+    print(f"\nTVD to the real frequencies ({sims.dropped:,} drops simulated in {sims.seconds:.0f} s of simulation, "
+          f"{seconds:.0f} s in all, on a shared machine)")  # fmt: skip
+    print(f"{'die':<14}{'rolls':>6}" + "".join(f"{c:>12}" for c in cols))
+    for row in rows:
         cells = "".join(f"{'-':>12}" if row[c] is None else f"{row[c]:12.4f}" for c in cols)
-        print(f"{row['die']:<14}{row['rolls']:>6}{cells}   {pick}")
+        print(f"{row['die']:<14}{row['rolls']:>6}{cells}")
 
-    def mean(c: str, which=rows) -> str:
+    def mean(c: str, which) -> float | None:
         vals = [r[c] for r in which if r[c] is not None]
-        return f"{np.mean(vals):12.4f}" if vals else f"{'-':>12}"
+        return float(np.mean(vals)) if vals else None
 
-    print(f"{'mean':<20}" + "".join(mean(c) for c in cols))
-    both = [r for r in rows if r["ours"] is not None]
-    print(f"{'mean (realrolls)':<20}" + "".join(mean(c, both) for c in cols))
-    wins = sum(r["loo"] is not None and r["loo"] < r["default"] for r in rows)
-    print(f"\nleave-one-out calibrated beats default physics on {wins} of {len(rows)} dice; "
-          f"in-sample pick: candidate {everywhere}; beats sampling noise x1.5 on "
-          f"{sum(r['loo'] is not None and r['loo'] <= 1.5 * r['noise'] for r in rows)} of {len(rows)}")  # fmt: skip
-    for j in sorted(set(picks) | {everywhere}):
-        print(f"  candidate {j}: " + " ".join(f"{n}={v:.3g}" for n, v in zip(FREE, spec.values(xs[j])))
-              + f"  total deviance {dev[:, j].sum():.1f}")  # fmt: skip
+    groups = {"mean, all dice": rows, "mean, the real-rolls dice": [r for r in rows if r["ours"] is not None]}
+    means = {}
+    for label, which in groups.items():
+        means[label] = {c: mean(c, which) for c in cols}
+        print(f"{label:<20}" + "".join(f"{'-':>12}" if v is None else f"{v:12.4f}" for v in means[label].values()))
+    wins = {ref: sum(r["loo"] < r[ref] for r in rows if r[ref] is not None) for ref in ("default", "ours", "bullet")}
+    print(
+        f"\nleave-one-out calibrated beats: default physics on {wins['default']} of {len(rows)} dice, `ours` on "
+        f"{wins['ours']} of {len(groups['mean, the real-rolls dice'])}, `bullet` on {wins['bullet']}; "
+        f"within 1.5x sampling noise on {sum(r['loo'] <= 1.5 * r['noise'] for r in rows)} of {len(rows)}"
+    )
+
+    print("\nresponse surfaces: mean TVD to their own candidates' frequencies (the simulation noise of one candidate)")
+    for name, gap, expected in fit_rows:
+        print(f"  {name:<14}{gap:.4f} ({expected:.4f})")
+
+    # which settings the fit leans on: the rise of the total deviance when one setting sweeps its range
+    total = lambda x: sum(deviance(d.counts, d.symmetrized(s.smoothed(x))) for d, s in zip(dice, surfaces))  # noqa: E731
+    base = total(x_all)
+    print(
+        f"\nin-sample fit over all {len(dice)} dice: "
+        + " ".join(f"{n}={v:.3g}" for n, v in zip(FREE, spec.values(x_all)))
+        + f"; total deviance {base:.1f} (defaults {total(x0):.1f}), prior {prior_penalty(x_all, x0, args.prior):.1f}"
+    )
+    print("rise of the total deviance as one setting sweeps its range (others at the in-sample fit):")
+    leans = {}
+    for k, name in enumerate(FREE):
+        grid = np.linspace(0, 1, 21)
+        vals = [total(np.where(np.arange(len(FREE)) == k, g, x_all)) for g in grid]
+        leans[name] = float(max(vals) - base)
+        lo, hi = spec.bounds[k]
+        print(f"  {name:<12} up to +{leans[name]:.1f} (least at {lo + grid[int(np.argmin(vals))] * (hi - lo):.3g})")
+    if args.json is not None:
+        summary = {"args": {k: str(v) for k, v in vars(args).items()}, "rows": rows, "means": means,
+                   "in_sample": dict(zip(FREE, spec.values(x_all).tolist())), "leans": leans, "seconds": seconds,
+                   "drops": sims.dropped}  # fmt: skip
+        args.json.write_text(json.dumps(summary, indent=2))
     return 0
 
 

@@ -23,8 +23,12 @@ BENCHMARKS = {
     "bench_stl.py": ([], ["--repeat", "3"]),
     "bench_validate.py": ([], ["--n", "3000"]),
     "bench_fastmodel.py": ([], ["--designs", "4", "--drops", "3000"]),
+    "bench_families.py": (["--designs", "4", "--drops", "3000"], ["--designs", "1", "--drops", "500"]),
     "bench_simopt.py": ([], ["--budget", "1", "--validate", "3000"]),
-    "bench_calibrate.py": ([], ["--drops", "200", "--candidates", "3", "--cache", "/dev/null"]),
+    "bench_calibrate.py": (
+        [],
+        ["--drops", "100", "--slow-drops", "30", "--candidates", "3", "--predict-drops", "100", "--cache", "/dev/null"],
+    ),
     "bench_realrolls.py": ([], ["--sims", "200"]),
     "bench_basins.py": ([], []),
     "bench_many_faces.py": ([], ["--sims", "40"]),

@@ -45,16 +45,20 @@ solid stays uniform and mirror-image faces stay equal.
 
 This chain applies to any convex die, but it is coarse: its error against
 pybullet varies with the shape in ways no per-face geometric term captured
-(a median TVD of 0.04-0.06 on random gems).  For the gem family the error is
-learned as well:
+(a median TVD of 0.04-0.06 on random gems, more on other families).  What
+it misses is learned from simulations, one of two ways (:func:`fast_model`):
 
-4. **the gem discrepancy** (:class:`Discrepancy`): simulated frequencies
-   minus the chain's probabilities at random stable gems (800 in the
-   packaged data), interpolated by a smoothed thin-plate spline over the
-   parameters and the chain's own margins and probabilities, are added to
-   the chain's probabilities (:func:`fast_model`).  The model of the physics
-   *is* then partly a surrogate of the simulator, for the gem family only;
-   other dice get the chain alone.
+4. **the gem discrepancy** (:class:`Discrepancy`), for the gem family:
+   simulated frequencies minus the chain's probabilities at random stable
+   gems (800 in the packaged data), interpolated by a smoothed thin-plate
+   spline over the parameters and the chain's own margins and
+   probabilities, are added to the chain's probabilities;
+5. **the general correction** (:mod:`diefab.correction`), for every other
+   convex die: a per-face logit correction, a function of features every
+   polyhedron has (margins, barriers, areas, the chain's own shares ...),
+   fitted to random dice of every family.
+
+The model of the physics *is* then partly a surrogate of the simulator.
 
 Examples
 --------
@@ -300,14 +304,16 @@ def fast_model(poly: Polyhedron, center: np.ndarray, *, fill: Fill | None = None
     """(m,) float: the calibrated fast model (``MODELS["fast"]``).
 
     The chain model (:func:`landing_probabilities`, with the body's
-    `inertia` if given) for every die; for a gem inside the family box,
-    corrected by the gem family's learned discrepancy
+    `inertia` if given) with a learned correction.  For a gem inside the
+    family box with every face stable, the gem family's discrepancy
     (:func:`gem_discrepancy`), and for a gem made with a `fill` that has a
     learned correction of its own (:func:`fill_discrepancy`: printed, or
-    card), by that as well.  A gem is recognized by
+    card), that as well.  Every other die gets the per-face logit correction
+    learned from random dice of every family
+    (:func:`diefab.correction.corrected`).  A gem is recognized by
     :func:`~diefab.families.gem_parameters`: built by the gem family, not the
-    same shape given as a ``convex`` or ``mesh`` design, which gets the chain
-    alone.
+    same shape given as a ``convex`` or ``mesh`` design, which gets the
+    general correction.
 
     Parameters
     ----------
@@ -320,14 +326,16 @@ def fast_model(poly: Polyhedron, center: np.ndarray, *, fill: Fill | None = None
         Inertia tensor about the centre of mass over the mass, model units²
         (default: the uniform solid's).
     """
-    p = landing_probabilities(poly, center, inertia=inertia)
+    from .correction import corrected
+
     params = gem_parameters(poly)
-    if params is None:
-        return p
-    margins = face_margins(poly, center)
-    p = gem_discrepancy().correct(p, params, margins)
-    layer = fill_discrepancy(fill.kind) if fill is not None else None
-    return p if layer is None else layer.correct(p, params, margins)
+    if params is not None:
+        margins = face_margins(poly, center)
+        if gem_discrepancy().covers(params, margins):
+            p = gem_discrepancy().correct(landing_probabilities(poly, center, inertia=inertia), params, margins)
+            layer = fill_discrepancy(fill.kind) if fill is not None else None
+            return p if layer is None else layer.correct(p, params, margins)
+    return corrected(poly, center, inertia=inertia)
 
 
 # ---------------------------------------------------------------------------
@@ -518,6 +526,11 @@ class Discrepancy:
             return None
         return self._interpolator(self._coordinates(x[None], np.atleast_2d(margins), np.atleast_2d(chain)))[0]
 
+    def covers(self, params: Mapping[str, float], margins: np.ndarray) -> bool:
+        """Whether :meth:`correct` applies a correction: inside the box, every face with a positive margin."""
+        x = self._point(params)
+        return bool(np.all(x >= self.lower) and np.all(x <= self.upper) and np.min(margins) > 0)
+
     def correct(self, p: np.ndarray, params: Mapping[str, float], margins: np.ndarray) -> np.ndarray:
         """Chain probabilities `p` plus the learned residual (faded out below the training margins).
 
@@ -580,6 +593,8 @@ def calibrate(
     designs: Sequence,
     counts: Sequence[np.ndarray],
     x0=(TEMPERATURE, TAU, AREA_POWER, HEIGHT_WEIGHT, ROLL_POWER),
+    *,
+    maxfev: int = 3000,
 ) -> dict[str, float]:
     """Fit the model's five constants to simulated face counts by least mean TVD.
 
@@ -593,6 +608,8 @@ def calibrate(
         Simulated landings per face of each design (polyhedron order).
     x0 : (5,) float
         Start: temperature, tau, area_power, height_weight, roll_power.
+    maxfev : int
+        Most evaluations of the mean TVD.
 
     Returns
     -------
@@ -613,6 +630,6 @@ def calibrate(
 
     start = np.array([np.log(x0[0]), np.log(x0[1]), x0[2], x0[3], x0[4]])
     simplex = np.vstack([start, start + 0.3 * np.eye(len(start))])
-    options = {"xatol": 1e-3, "fatol": 1e-6, "maxfev": 3000, "adaptive": True, "initial_simplex": simplex}
+    options = {"xatol": 1e-3, "fatol": 1e-6, "maxfev": maxfev, "adaptive": True, "initial_simplex": simplex}
     res = minimize(loss, start, method="Nelder-Mead", options=options)
     return {**constants(res.x), "mean_tvd": float(res.fun)}

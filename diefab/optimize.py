@@ -54,6 +54,14 @@ INVALID = 1e6
 POLISH_RESTARTS = 5
 
 
+def _corrected(probs: np.ndarray, correction: np.ndarray | None) -> list[np.ndarray]:
+    """`probs` with each row of `correction` added, clipped at 0 and renormalized (`probs` itself without one)."""
+    if correction is None:
+        return [probs]
+    rows = np.clip(probs + np.atleast_2d(correction), 0.0, None)
+    return list(rows / rows.sum(axis=1, keepdims=True))
+
+
 @dataclass(frozen=True, eq=False)
 class Problem:
     """A design's free parameters mapped to the unit cube, and its evaluation.
@@ -70,10 +78,12 @@ class Problem:
         ``eq2`` (the paper's Eq. (2)), ``tvd`` or ``jsd``.
     min_margin : float
         Smallest acceptable stability margin of every face, model units.
-    correction : (m,) float, optional
+    correction : (m,) or (t, m) float, optional
         Added to the model's face probabilities (then clipped at 0 and
         renormalized): simulated minus modelled frequencies at a nearby
         design, so that the model is corrected where the simulation was run.
+        With one row per throw (physics settings), the objective is the
+        worst over the rows and the values are those of the worst row.
     read_by : tuple of str
         The reading conventions a resting face may use
         (:data:`diefab.readings.KINDS`; e.g. ``("face", "vertex")``: no value
@@ -130,12 +140,13 @@ class Problem:
         if _outside(poly, body.center) >= 0:  # a stated centre of mass the candidate no longer holds
             return INFEASIBLE + 1 + _outside(poly, body.center), np.full(len(design.support), np.nan), margins
         probs = model_probabilities(self.model, poly, body, design.fill)
-        if self.correction is not None:
-            probs = np.clip(probs + self.correction, 0.0, None)
-            probs = probs / probs.sum()
-        values = np.bincount(self._value_index, weights=np.where(self._resting, probs, 0.0),
-                             minlength=len(design.support))  # fmt: skip
-        score = OBJECTIVES[self.objective](values, self._target)
+        score, values = -np.inf, None
+        for corrected in _corrected(probs, self.correction):
+            v = np.bincount(self._value_index, weights=np.where(self._resting, corrected, 0.0),
+                            minlength=len(design.support))  # fmt: skip
+            s = OBJECTIVES[self.objective](v, self._target)
+            if s > score:
+                score, values = s, v
         violation = self.violation(margins)
         if violation >= 0:
             score = INFEASIBLE + violation

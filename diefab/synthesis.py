@@ -35,9 +35,10 @@ Examples
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from math import ceil
+from typing import Any
 
 import numpy as np
 from scipy.optimize import brentq
@@ -81,6 +82,8 @@ MIN_STEP_SECONDS = 10.0
 REFINE_STEPS = 6
 #: Refinement stops once the simulated TVD is below this.
 REFINE_GOAL = 0.008
+#: Fewest drops under each of several throws in a refinement step.
+MIN_THROW_DROPS = 4_000
 #: Smallest tipping angle (degrees) a two-class die's tuning may reach.
 STEADY_TIPPING = 9.0
 
@@ -254,6 +257,7 @@ def synthesize(
     workers: int | None = None,
     settings=None,
     progress: Callable[[str], None] | None = None,
+    throws: Sequence[Mapping[str, Any]] = (),
 ) -> Synthesis:
     """Design a die for `target`.
 
@@ -275,6 +279,12 @@ def synthesize(
         Seeds the optimizer's random starts and the refinement's drops.
     settings : PhysicsSettings, optional
         The physics the drops of ``simulation`` use (default: the design's).
+    throws : sequence of mapping, optional
+        Physics settings to refine a shaped die against all at once (a
+        robust design; they replace `settings` there): each refinement step
+        drops the die under every one, corrects the model by each one's
+        simulated-minus-modelled frequencies and minimizes the worst of the
+        corrected objectives; a step is judged by its worst simulated TVD.
 
     Raises
     ------
@@ -329,7 +339,7 @@ def synthesize(
             say(f"the {final_model} model finds no stable die from the solid-angle optimum: {exc}")
     out = Synthesis(best.design, best.objective, best.values, final_model, tried)
     if model == "simulation":
-        _refine(out, target, t0 + budget_seconds, seed, min_margin, workers, settings, say)
+        _refine(out, target, t0 + budget_seconds, seed, min_margin, workers, settings, say, throws)
     return out
 
 
@@ -462,36 +472,57 @@ def _not_on_faces(design: Design) -> int:
 
 
 def _refine(
-    out: Synthesis, target: Target, deadline: float, seed: int, min_margin: float, workers, settings, say
+    out: Synthesis,
+    target: Target,
+    deadline: float,
+    seed: int,
+    min_margin: float,
+    workers,
+    settings,
+    say,
+    throws: Sequence[Mapping[str, Any]] = (),
 ) -> None:
-    """Correct the model by simulation until the simulated TVD is small or time runs out (updates `out`)."""
-    from .physics import simulate
+    """Correct the model by simulation until the simulated TVD is small or time runs out (updates `out`).
+
+    The drops use `settings`; with `throws`, every step drops the die under
+    each instead (a share of the drops each, at least
+    :data:`MIN_THROW_DROPS`) and its TVD is the worst.
+    """
+    from .physics import PhysicsSettings, simulate
 
     goal = target.aligned(out.design.support)
     design, objective, predicted = out.design, out.objective, out.predicted
     best_tvd = np.inf
     per_drop = 0.0
-    for step in range(REFINE_STEPS):
+    runs = [PhysicsSettings.from_mapping(t) for t in throws] or [settings]
+
+    def step_drops(step: int) -> int:
         drops = REFINE_DROPS if step else REFINE_DROPS // 2
-        if time.monotonic() + per_drop * drops > deadline:
+        return max(drops // len(runs), MIN_THROW_DROPS) if len(runs) > 1 else drops
+
+    for step in range(REFINE_STEPS):
+        drops = step_drops(step)
+        if time.monotonic() + per_drop * drops * len(runs) > deadline:
             break
-        sim = simulate(design, drops, seed=seed + step, workers=workers, settings=settings)
-        per_drop = sim.seconds / drops
-        distance = tvd(sim.value_probabilities(design), goal)
-        out.steps.append(
-            {"step": step, "drops": drops, "params": dict(design.params), "simulated_tvd": float(distance)}
-        )
-        say(f"refinement {step}: simulated TVD {distance:.4f} at {drops} drops")
+        sims = [simulate(design, drops, seed=seed + step, workers=workers, settings=s) for s in runs]
+        per_drop = sum(sim.seconds for sim in sims) / drops / len(sims)
+        each = [float(tvd(sim.value_probabilities(design), goal)) for sim in sims]
+        distance = max(each)
+        out.steps.append({"step": step, "drops": drops, "params": dict(design.params), "simulated_tvd": distance,
+                          **({"throw_tvds": each} if len(sims) > 1 else {})})  # fmt: skip
+        worst = " (worst of " + ", ".join(f"{v:.4f}" for v in each) + ")" if len(sims) > 1 else ""
+        say(f"refinement {step}: simulated TVD {distance:.4f}{worst} at {drops} drops")
         if distance < best_tvd:
             best_tvd = distance
             out.design, out.objective, out.predicted = design, objective, predicted
         if distance < REFINE_GOAL or time.monotonic() > deadline:
             break
         body = design.mass_properties()
-        correction = sim.face_probabilities - model_probabilities(RANK_MODEL, design.polyhedron, body, design.fill)
+        modelled = model_probabilities(RANK_MODEL, design.polyhedron, body, design.fill)
+        correction = np.array([sim.face_probabilities for sim in sims]) - modelled  # one row per throw
         try:
             # leave time for the next simulation, which judges this step
-            stop = max(time.monotonic() + MIN_STEP_SECONDS, deadline - per_drop * REFINE_DROPS)
+            stop = max(time.monotonic() + MIN_STEP_SECONDS, deadline - per_drop * step_drops(step + 1) * len(runs))
             result = optimize_design(design, model=RANK_MODEL, min_margin=min_margin, starts=0, seed=seed,
                                      name=design.name, correction=correction, deadline=stop)  # fmt: skip
         except DesignError:

@@ -301,3 +301,64 @@ def test_realrolls_die_keeps_counts_groups_and_references():
     die = realrolls_die(REALROLLS)
     assert die.n == data["physical"]["n"] and sorted(die.counts.tolist()) == sorted(data["physical"]["counts"])
     assert len(die.groups) == len(data["ambiguous_groups"]) and {"ours", "bullet"} <= set(die.reference)
+
+
+# ----------------------------------------------------------------------
+# response surfaces of simulated counts
+
+
+def _true_surface(d: int = 2):
+    """A known 3-value surface, quadratic in the logits, and its probabilities."""
+    from diefab.calibrate import ResponseSurface, quadratic_features
+
+    rng = np.random.default_rng(3)
+    coef = np.zeros((quadratic_features(np.zeros((1, d))).shape[1], 3))
+    coef[:, 1:] = rng.normal(scale=1.0, size=(coef.shape[0], 2))
+    return ResponseSurface(coef, 400)
+
+
+def test_surface_recovers_a_quadratic_logit_from_multinomial_counts():
+    from diefab.calibrate import fit_surface
+
+    truth = _true_surface()
+    rng = np.random.default_rng(0)
+    xs = rng.random((40, 2))
+    counts = np.array([rng.multinomial(400, p) for p in truth.probabilities(xs)])
+    fitted = fit_surface(xs, counts, ridge=1e-6)
+    grid = rng.random((200, 2))
+    gap = 0.5 * np.abs(fitted.probabilities(grid) - truth.probabilities(grid)).sum(axis=1)
+    # pooling 40 x 400 drops: far below one point's simulation noise (about 0.03 TVD for 3 values)
+    assert gap.mean() < 0.01 and gap.max() < 0.03
+    assert np.allclose(fitted.probabilities(grid).sum(axis=1), 1.0)
+    assert fitted.drops == 400
+
+
+def test_surface_keeps_a_value_never_simulated_possible():
+    from diefab.calibrate import fit_surface
+
+    xs = np.linspace(0, 1, 6)[:, None]
+    counts = np.c_[np.full(6, 50), np.full(6, 50), np.zeros(6)]
+    s = fit_surface(xs, counts)
+    p = s.smoothed(np.array([0.3]))
+    assert np.all(p > 0) and p[2] < 0.01 and p.sum() == pytest.approx(1.0)
+
+
+def test_fit_settings_finds_the_setting_that_made_the_rolls_and_the_prior_pulls_toward_the_start():
+    from diefab.calibrate import RealDie, ResponseSurface, fit_settings, quadratic_features
+    from diefab.design import load_design
+
+    cube = load_design("d6")  # six values
+    rng = np.random.default_rng(5)
+    features = quadratic_features(np.zeros((1, 2))).shape[1]
+    dice, surfaces = [], []
+    for k in range(3):  # three dice with their own responses to one physics x* = (0.7, 0.3)
+        coef = np.zeros((features, 6))
+        coef[:, 1:] = rng.normal(scale=1.5, size=(features, 5))
+        surface = ResponseSurface(coef, 400)
+        counts = rng.multinomial(2_000, surface.probabilities(np.array([0.7, 0.3])))
+        dice.append(RealDie(f"die{k}", cube, counts))
+        surfaces.append(surface)
+    x, _ = fit_settings(dice, surfaces, np.array([0.5, 0.5]), starts=[np.array([0.2, 0.8])])
+    assert np.allclose(x, [0.7, 0.3], atol=0.05)
+    tight, _ = fit_settings(dice, surfaces, np.array([0.5, 0.5]), sigma=1e-4)
+    assert np.allclose(tight, [0.5, 0.5], atol=0.01)

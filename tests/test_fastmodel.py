@@ -292,10 +292,12 @@ def test_packaged_discrepancy_matches_the_chain_and_the_family():
     assert fit.margins.min() >= fit.info["min_margin"]
 
 
-def test_fast_model_is_the_chain_for_non_gems_and_corrected_for_gems():
+def test_fast_model_is_the_general_correction_for_non_gems_and_the_discrepancy_for_gems():
+    from diefab.correction import corrected
+
     d6 = load_design("d6")
     c = d6.mass_properties().center
-    assert np.array_equal(fast_model(d6.polyhedron, c), landing_probabilities(d6.polyhedron, c))
+    assert np.array_equal(fast_model(d6.polyhedron, c), corrected(d6.polyhedron, c))
     gem = load_design("fudge-gem")
     c = gem.mass_properties().center
     assert not np.allclose(fast_model(gem.polyhedron, c), landing_probabilities(gem.polyhedron, c), atol=1e-3)

@@ -150,3 +150,18 @@ def test_design_tunes_a_two_class_die_under_a_model():
     assert len(d.values) == 24 and d.family == "bipyramid"
     np.testing.assert_allclose(value_probabilities(d, "fast"), target.aligned(d.support), atol=1e-6)
     assert unreadable(d.polyhedron, d.values) is None
+
+
+def test_design_command_reports_how_the_die_carries_the_target(tmp_path, capsys):
+    import json
+
+    from diefab.cli import main
+    from diefab.design import load_design
+
+    with pytest.raises(SystemExit) as exit_:
+        main(["design", "binomial:4", "--model", "fast", "--validate-sims", "0", "--out", str(tmp_path), "--json"])
+    assert exit_.value.code == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["method"] == "fair" and len(report["values"]) == 16 and report["tvd"] < 1e-6
+    d = load_design(report["design_file"])
+    assert sorted(d.values.values()).count(2) == 6

@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from .common import FILL_OPTIONS, console, emit_json, fill_options, json_option, out_option
+from .common import FILL_OPTIONS, console, emit_json, fill_options, json_option, out_option, physics_file_option
 
 _METHOD = {
     "fair": "a fair die, its faces counted out to the target",
@@ -42,23 +42,31 @@ def _slug(text: str) -> str:
 @click.option("--validate-sims", type=click.IntRange(0, 10_000_000), default=10_000, show_default=True,
               help="Drops of the closing check (on a seed the search never used); 0 skips it.")  # fmt: skip
 @click.option("--workers", type=click.IntRange(1, 256), default=None, help="Worker processes (default all cores).")
+@physics_file_option
+@click.option("--robust", is_flag=True,
+              help="Refine and check against every standard throw and table (the shipped profiles soft-tray, "
+              "wooden-table, hard-tray, low-spin, high-spin; each over --physics), judged by the worst.")  # fmt: skip
 @out_option
 @json_option
 def design(target, faces, family_name, model, budget, name, seed, size_mm, min_margin, validate_sims, workers,
-           out_dir, as_json, fill_kind, **fill_settings) -> None:  # fmt: skip
+           physics_profile, robust, out_dir, as_json, fill_kind, **fill_settings) -> None:  # fmt: skip
     """Design a die that rolls like TARGET (2d6, 3dF, binomial:4, uniform:3, 1:3,2:3,...).
 
     Picks a family and face count that can carry the target's values,
     assigns values to faces, optimizes the shape, checks it by simulation on
     a fresh seed, and writes OUT/NAME.toml.  With --fill paper or print (and
-    their settings) the die is designed as it will be made.
+    their settings) the die is designed as it will be made.  With --physics
+    the die is refined and checked under that profile, which the design file
+    keeps as its [physics] table; with --robust, under each standard throw
+    and table at once.
     """
     from dataclasses import replace
 
     from ..design import design_to_toml
     from ..files import atomic_write, ensure_dir, output_path
     from ..mass import Fill
-    from ..physics import simulate
+    from ..physics import PhysicsSettings, simulate
+    from ..profiles import STANDARD, load_profile
     from ..stats import goodness_of_fit, pearson_divergence, tvd
     from ..synthesis import synthesize
     from ..targets import parse_target
@@ -75,6 +83,11 @@ def design(target, faces, family_name, model, budget, name, seed, size_mm, min_m
         raise click.BadParameter(f"{min_margin} must be a non-negative number", param_hint="--min-margin")
     if name is not None and not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9._-]{0,99}", name):
         raise click.BadParameter(f"{name!r}: use letters, digits, '.', '_' and '-'", param_hint="--name")
+    if robust and model != "simulation":
+        raise click.BadParameter("--robust needs --model simulation (the other models do not simulate)",
+                                 param_hint="--robust")  # fmt: skip
+    physics = {} if physics_profile is None else load_profile(physics_profile).as_dict()
+    throws = [load_profile(p, base=physics).as_dict() for p in STANDARD] if robust else []
     family = None if family_name == "auto" else family_name
     ensure_dir(out_dir)
     err = console(stderr=True)
@@ -82,29 +95,40 @@ def design(target, faces, family_name, model, budget, name, seed, size_mm, min_m
     found = synthesize(
         goal, faces=faces, family=family, fill=made, model=model, budget_seconds=budget * 60, seed=seed,
         name=name or "die", size_mm=size_mm, min_margin=min_margin, workers=workers, progress=say,
+        settings=PhysicsSettings.from_mapping(physics), throws=throws,
     )  # fmt: skip
     d = replace(
         found.design,
+        physics=physics,
         name=name or f"{found.design.family}-{_slug(target)}",
         description=f"designed for {target} by diefab design: {_METHOD[found.method]} "
         f"({found.model} model, seed {seed})",
     )
+    how = (f" --physics {physics_profile}" if physics_profile else "") + (" --robust" if robust else "")
     path = atomic_write(
         output_path(out_dir, d.name, ".toml"),
         design_to_toml(
             d,
             comment=f"Written by: diefab design {target} --model {model} --seed {seed}"
-            + (f" --fill {made.kind}" if made.kind != "solid" else ""),
+            + (f" --fill {made.kind}" if made.kind != "solid" else "")
+            + how,
         ),  # fmt: skip
     )
     aligned = goal.aligned(d.support)
     validated = None
     if validate_sims:
         check_seed = seed + 1_000_003  # never used by the search (its drops use seed .. seed + steps)
-        result = simulate(d, validate_sims, seed=check_seed, workers=workers)
-        fit = goodness_of_fit(result.value_counts(d), aligned, seed=check_seed)
-        validated = {"n": result.n, "landed": result.landed, "seed": check_seed, "tvd": fit.tvd,
-                     "p_value": fit.p_value}  # fmt: skip
+        checks = []
+        for throw in throws or [d.physics]:
+            result = simulate(d, validate_sims, seed=check_seed, workers=workers,
+                              settings=PhysicsSettings.from_mapping(throw))  # fmt: skip
+            fit = goodness_of_fit(result.value_counts(d), aligned, seed=check_seed)
+            checks.append({"n": result.n, "landed": result.landed, "seed": check_seed, "tvd": fit.tvd,
+                           "p_value": fit.p_value})  # fmt: skip
+        validated = max(checks, key=lambda c: c["tvd"])
+        if throws:
+            validated = {**validated, "profiles": dict(zip(STANDARD, checks)),
+                         "worst_profile": STANDARD[checks.index(validated)]}  # fmt: skip
     report = {
         "design_file": str(path),
         "family": d.family,
@@ -118,6 +142,8 @@ def design(target, faces, family_name, model, budget, name, seed, size_mm, min_m
         "objective": float(pearson_divergence(found.predicted, aligned)),
         "tvd": float(tvd(found.predicted, aligned)),
         "validated": validated,
+        "physics": physics_profile,
+        "robust": robust,
         "tried": found.tried,
         "refinement": found.steps,
         "seconds": time.monotonic() - t0,
@@ -145,6 +171,12 @@ def _print_report(d, report: dict, path: Path) -> None:
     con.print(table)
     con.print(f"Eq. (2) {report['objective']:.5f}, TVD {report['tvd']:.4f} under the {report['model']} model")
     v = report["validated"]
-    if v:
-        con.print(f"validated: {v['n']} drops (seed {v['seed']}), TVD {v['tvd']:.4f}, p = {v['p_value']:.3g}")
+    if v and "profiles" in v:
+        for profile, c in v["profiles"].items():
+            con.print(f"validated under {profile}: {c['n']} drops (seed {c['seed']}), TVD {c['tvd']:.4f}, "
+                      f"p = {c['p_value']:.3g}")  # fmt: skip
+        con.print(f"worst: {v['worst_profile']}, TVD {v['tvd']:.4f}")
+    elif v:
+        under = f" under {report['physics']}" if report["physics"] else ""
+        con.print(f"validated{under}: {v['n']} drops (seed {v['seed']}), TVD {v['tvd']:.4f}, p = {v['p_value']:.3g}")
     con.print(f"wrote {path} ({report['seconds']:.0f} s)")
