@@ -30,6 +30,8 @@ BENCHMARKS = {
         ["--drops", "100", "--slow-drops", "30", "--candidates", "3", "--predict-drops", "100", "--cache", "/dev/null"],
     ),
     "bench_realrolls.py": ([], ["--sims", "200"]),
+    "bench_basins.py": ([], []),
+    "bench_many_faces.py": ([], ["--sims", "40"]),
 }
 
 

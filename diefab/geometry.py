@@ -738,6 +738,74 @@ class RestBasins:
             v0 = np.repeat(v0[mixed], 4) + np.tile([0, size, 0, size], k)
         raise AssertionError("unreachable")
 
+    def exact_shares(self, samples: int = 64, rounds: int = 40) -> tuple[np.ndarray, float]:
+        """(m,) float: the share of all orientations whose downhill flow ends on each face, by spherical polygons.
+
+        Inside the normal cone of a vertex v the flow runs along great
+        circles away from ``v / |v|`` (the apex), so the fate of a direction
+        depends only on where its great circle through the apex leaves the
+        cone.  Along each side of each cone the fate is piecewise constant;
+        the side is sampled at `samples` points, every change of fate found
+        by `rounds` bisections, and each piece, with the apex, spans a
+        spherical triangle whose signed area (Van Oosterom and Strackee)
+        goes to that fate.  Summed over the sides of a cone the signed
+        triangles tile it exactly (the cone lies in the apex's open
+        hemisphere, since the centre of mass is inside the die), so the
+        shares sum to 1 and are exact up to the bisection (``2**-rounds``
+        of a sample step), provided no basin meets a cone side only between
+        two neighbouring samples that agree.
+
+        Returns the shares and the bound: the share of the sphere in the
+        triangles over the bisection brackets left at the end.
+        """
+        n, width = self.neighbors.shape
+        real = np.ones((n, width), dtype=bool)
+        real[:, 1:] = self.neighbors[:, 1:] != self.neighbors[:, :1]  # rows are padded by repeating the first
+        vi, ki = np.nonzero(real)
+        p, q = self.normals[self.arc_faces[vi, ki, 0]], self.normals[self.arc_faces[vi, ki, 1]]
+        inside = np.zeros((n, 3))
+        np.add.at(inside, vi, p + q)
+        inside /= np.linalg.norm(inside, axis=1)[:, None]
+        c = inside[vi]
+        # orient each side with its cone on the left
+        swap = np.einsum("ij,ij->i", _cross(p, q), c) < 0
+        p, q = np.where(swap[:, None], q, p), np.where(swap[:, None], p, q)
+        apex = self.vertices[vi] / np.linalg.norm(self.vertices[vi], axis=1)[:, None]
+        sides = len(vi)
+
+        def point(side: np.ndarray, t: np.ndarray) -> np.ndarray:
+            x = (1 - t)[:, None] * p[side] + t[:, None] * q[side]
+            return x / np.linalg.norm(x, axis=1)[:, None]
+
+        def fate(side: np.ndarray, t: np.ndarray) -> np.ndarray:
+            x = point(side, t)
+            x = x + tol.TIP * (c[side] - x)  # just inside the cone
+            return self.face_of(x / np.linalg.norm(x, axis=1)[:, None])
+
+        t = (np.arange(samples) + 0.5) / samples
+        side = np.repeat(np.arange(sides), samples)
+        found = fate(side, np.tile(t, sides)).reshape(sides, samples)
+        s, j = np.nonzero(found[:, 1:] != found[:, :-1])
+        lo, hi = t[j], t[j + 1]
+        left = found[s, j]
+        for _ in range(rounds):
+            mid = 0.5 * (lo + hi)
+            same = fate(s, mid) == left
+            lo, hi = np.where(same, mid, lo), np.where(same, hi, mid)
+        # pieces of each side: [0, b1], [b1, b2], ..., [bk, 1], with the fate of the samples inside them
+        cut = 0.5 * (lo + hi)
+        starts = np.concatenate([np.arange(sides), s])
+        at = np.concatenate([np.zeros(sides), cut])
+        order = np.lexsort((at, starts))
+        starts, at = starts[order], at[order]
+        ends = np.append(at[1:], 1.0)
+        ends[np.append(starts[1:] != starts[:-1], True)] = 1.0
+        fates = np.concatenate([found[:, 0], found[s, j + 1]])[order]
+        total = np.zeros(len(self.targets))
+        np.add.at(total, fates, _signed_triangle(apex[starts], point(starts, at), point(starts, ends)))
+        slack = np.abs(_signed_triangle(apex[s], point(s, lo), point(s, hi))).sum()
+        return total / (4 * np.pi), float(slack / (4 * np.pi))
+
     def face_of(self, down: np.ndarray) -> np.ndarray:
         """(k,) int: the face whose basin each unit direction of `down` ((k, 3), body frame) lies in."""
         d = np.array(np.atleast_2d(down), dtype=float)
@@ -770,6 +838,13 @@ class RestBasins:
             v[live[cross]] = self.neighbors[vl, k][cross]
             live = live[cross]
         return out
+
+
+def _signed_triangle(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """(k,) float: signed solid angle of the spherical triangles a, b, c ((k, 3) unit vectors each)."""
+    det = np.einsum("ij,ij->i", a, _cross(b, c))
+    dots = 1 + np.einsum("ij,ij->i", a, b) + np.einsum("ij,ij->i", b, c) + np.einsum("ij,ij->i", c, a)
+    return 2 * np.arctan2(det, dots)
 
 
 def _tipping_direction(poly: Polyhedron, face: int, center: np.ndarray) -> np.ndarray:

@@ -63,12 +63,13 @@ def basin_shares(poly: Polyhedron, center: np.ndarray) -> tuple[np.ndarray, floa
     The quasi-static model of Baktash et al.: a die let go in a uniformly
     random orientation creeps downhill, without bouncing, to the resting
     face whose basin that orientation lies in (:class:`RestBasins`).  The
-    basins are integrated on an adaptive cube map
-    (:meth:`RestBasins.shares`); the bound is the share of the sphere left
-    in cells that straddle a basin rim (under 1e-3 for the shipped and real
-    dice).
+    basins are measured as spherical polygons
+    (:meth:`RestBasins.exact_shares`): exact up to a bisection of their rims,
+    whose remaining share of the sphere is the bound (about 1e-14).  The
+    adaptive cube map (:meth:`RestBasins.shares`, bound about 1e-3) is the
+    slower cross-check.
     """
-    return RestBasins.of(poly, center).shares()
+    return RestBasins.of(poly, center).exact_shares()
 
 
 def basins_model(poly: Polyhedron, center: np.ndarray) -> np.ndarray:

@@ -31,7 +31,7 @@ from .design import Design
 from .errors import DesignError
 from .families import family
 from .geometry import Polyhedron, face_margins
-from .mass import mass_properties
+from .mass import MassProperties, mass_properties, stated
 from .models import MODELS, model_probabilities
 from .readings import KINDS, unreadable
 from .stats import jsd, pearson_divergence, tvd
@@ -135,8 +135,10 @@ class Problem:
             poly = _polyhedron(design, params)
         except DesignError:
             return INVALID, np.full(len(design.support), np.nan), np.full(len(design.values), -np.inf)
-        body = mass_properties(poly, design.fill, mm_per_unit=design.mm_per_unit, tabs=self._tabs)
+        body = candidate_mass(design, poly, tabs=self._tabs)
         margins = face_margins(poly, body.center)
+        if _outside(poly, body.center) >= 0:  # a stated centre of mass the candidate no longer holds
+            return INFEASIBLE + 1 + _outside(poly, body.center), np.full(len(design.support), np.nan), margins
         probs = model_probabilities(self.model, poly, body, design.fill)
         score, values = -np.inf, None
         for corrected in _corrected(probs, self.correction):
@@ -193,6 +195,30 @@ class Problem:
     @cached_property
     def _target(self) -> np.ndarray:
         return self.design.target_distribution.aligned(self.design.support)
+
+
+def candidate_mass(design: Design, poly: Polyhedron, *, tabs=None) -> MassProperties:
+    """Mass properties of `poly`, a candidate shape of `design`, in the design's fill.
+
+    A centre of mass and inertia the design states (a weighted die, an
+    insert) replace the fill's, as in :meth:`Design.mass_properties`: a
+    candidate changes the shape around them, not them.
+    """
+    props = mass_properties(poly, design.fill, mm_per_unit=design.mm_per_unit, tabs=tabs)
+    if design.center_of_mass is None and design.inertia is None:
+        return props
+    center = None if design.center_of_mass is None else np.array(design.center_of_mass) * design._file_scale
+    return stated(props, center, stated_inertia(design))
+
+
+def stated_inertia(design: Design) -> np.ndarray | None:
+    """(3, 3) float: the design's stated inertia per unit mass in model units, or None."""
+    return None if design.inertia is None else np.array(design.inertia) * design._file_scale**2
+
+
+def _outside(poly: Polyhedron, center: np.ndarray) -> float:
+    """How far `center` lies outside `poly` (model units; <= 0 inside)."""
+    return float(np.max(poly.normals @ center - poly.offsets))
 
 
 def _polyhedron(design: Design, params: dict[str, float]) -> Polyhedron:

@@ -47,8 +47,7 @@ from .design import Design
 from .errors import DesignError, DiefabError
 from .files import atomic_write
 from .geometry import face_margins
-from .mass import mass_properties
-from .optimize import INFEASIBLE, INVALID, OBJECTIVES, Problem, _polyhedron
+from .optimize import INFEASIBLE, INVALID, OBJECTIVES, Problem, _outside, _polyhedron, candidate_mass
 from .stats import expected_tvd
 
 __all__ = [
@@ -253,7 +252,9 @@ class SimulationObjective:
             poly = _polyhedron(self.design, params)
         except DesignError:
             return {**record, "objective": INVALID, "feasible": False, "min_margin": None}
-        center = mass_properties(poly, self.design.fill, mm_per_unit=self.design.mm_per_unit).center
+        center = candidate_mass(self.design, poly).center
+        if _outside(poly, center) >= 0:  # a stated centre of mass the candidate no longer holds
+            return {**record, "objective": INFEASIBLE + 1 + _outside(poly, center), "feasible": False}
         margins = face_margins(poly, center)
         margin = float(margins[self.design.resting_mask()].min())
         record["min_margin"] = margin

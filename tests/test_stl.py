@@ -82,7 +82,8 @@ def test_labels_are_upright_and_not_mirrored(gem, gem_solid):
     for label in gem_solid.labels:
         assert np.allclose(np.cross(label.baseline, label.up), label.normal, atol=1e-12)
         assert abs(label.up @ label.normal) < 1e-12
-        if abs(label.normal @ axis) < 0.95:  # side faces: text up points to the die's top
+        # side faces: text up points to the die's top (a value read at a corner points to that corner)
+        if abs(label.normal @ axis) < 0.95 and label.face_outline is None:
             assert label.up @ axis > 0.3
 
 
@@ -117,7 +118,7 @@ def test_com_shift_equals_removed_prisms(gem_solid):
 
 def test_uncut_com_is_the_solids_and_print_fill_matches_mass_module(gem):
     bare = replace(gem, labels={f: "" for f in gem.label_of})
-    solid = build_solid(bare, size_mm=30.0)
+    solid = build_solid(bare, size_mm=30.0, with_marks=False)
     assert solid.labels == ()
     r = solid.report
     assert np.allclose(r["center_of_mass_mm"]["uncut"], gem.polyhedron.centroid * 15.0, atol=1e-9)
@@ -184,9 +185,11 @@ def test_emboss_adds_the_text_volume(gem):
     solid = build_solid(gem, size_mm=30.0, emboss=True)
     r = solid.report
     assert r["genus"] == 0 and r["bodies"] == 1
-    area = {label.face: label.area_mm2 for label in solid.labels}
-    raised = sum(area[f] for f in r["embossed"]) * r["depth_mm"]
-    sunk = sum(area[f] for f in r["engraved"]) * r["depth_mm"]
+    area = {}
+    for label in solid.labels:  # a face may hold a value read at a corner beside its own
+        area[label.face] = area.get(label.face, 0.0) + label.area_mm2
+    raised = sum(area[f] for f in set(r["embossed"])) * r["depth_mm"]
+    sunk = sum(area[f] for f in set(r["engraved"])) * r["depth_mm"]
     assert r["volume_mm3"] == pytest.approx(r["uncut_volume_mm3"] + raised - sunk, rel=1e-4)
     assert any("emboss" in w for w in solid.warnings)
 

@@ -133,4 +133,4 @@ def predict(design: str, params, model: str, target: str | None, as_json: bool, 
     con.print(table)
     con.print(f"Eq. (2) objective {result['objective']:.5f}   TVD {result['tvd']:.4f}   JSD {result['jsd']:.5f}")
     if bound is not None:
-        con.print(f"basins integrated to within {bound:.1e} (share of orientations on unresolved basin rims)")
+        con.print(f"basins measured to within {bound:.1e} (share of orientations on basin rims not yet resolved)")

@@ -44,7 +44,9 @@ __all__ = [
     "face_frame",
     "fit_label",
     "label_shape",
+    "mark_frame",
     "pip_shape",
+    "placed_marks",
     "symbol_shape",
     "reading_note",
     "small_die_warning",
@@ -56,6 +58,11 @@ AXIS_PROJECTION = 0.3
 PIP_DIAMETER = 0.24
 #: Dice smaller than this (in their size convention) are hard to handle and to read, mm.
 SMALL_DIE_MM = 8.0
+#: A value read at a corner or along an edge goes in the face shrunk toward that corner (the edge's middle)
+#: by this factor.
+MARK_REACH = 0.4
+#: Largest height of such a value, as a fraction of its face's inscribed diameter.
+MARK_FRACTION = 0.2
 #: Largest number of pips drawn.
 MAX_PIPS = 9
 _PIP_SPOTS = {
@@ -224,6 +231,67 @@ def fit_label(region, shape, max_height: float = math.inf) -> tuple[float, float
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if region.contains(shapely.polygons(hull * mid + at)) else (lo, mid)
     return min(lo, max_height), float(center.x), float(center.y)
+
+
+def placed_marks(design: Design) -> list:
+    """The values read at a corner or along an edge (:attr:`Design.markings` with a place), in order.
+
+    Empty for a die that no convention reads (net and stl then print the
+    face values alone, and :func:`reading_note` says what a point or an edge
+    on top means).
+    """
+    from ..errors import DesignError
+
+    try:
+        return [m for m in design.markings if m.at]
+    except DesignError:
+        return []
+
+
+def mark_frame(ring: np.ndarray, at: tuple[int, ...], *, y_down: bool = False):
+    """Where on a face a value read at a corner or along an edge goes, and which way up.
+
+    Parameters
+    ----------
+    ring : (k, 2) float
+        The face's corners in a plane frame.
+    at : tuple of int
+        Positions in `ring` of the corner (one) or of the edge's two ends.
+    y_down : bool
+        The frame's y points down (a page), so an unmirrored text frame
+        turns the other way.
+
+    Returns
+    -------
+    zone : shapely Polygon
+        The face shrunk by :data:`MARK_REACH` toward the corner or the
+        edge's middle: the text must lie in it.
+    origin, x_axis, y_axis : (2,) float
+        The text frame: origin at the corner (edge middle), y (the text's
+        up) pointing from the face's centre toward the corner, or square
+        out of the edge, so the value reads upright when that corner or
+        edge points up on the die.
+    """
+    from shapely import affinity
+    from shapely.geometry import Polygon
+
+    ring = np.asarray(ring, dtype=float)
+    face = Polygon(ring)
+    centre = np.asarray(face.centroid.coords[0])
+    if len(at) == 1:
+        origin = ring[at[0]]
+        up = origin - centre
+    else:
+        origin = (ring[at[0]] + ring[at[1]]) / 2
+        edge = ring[at[1]] - ring[at[0]]
+        up = np.array([-edge[1], edge[0]])
+        up = up if up @ (origin - centre) > 0 else -up
+    up = up / np.linalg.norm(up)
+    x = np.array([up[1], -up[0]])  # (x, up) turns counter-clockwise in a y-up frame
+    if y_down:
+        x = -x
+    zone = affinity.scale(face, MARK_REACH, MARK_REACH, origin=(float(origin[0]), float(origin[1])))
+    return zone, origin, x, up
 
 
 def reading_note(design: Design) -> str:

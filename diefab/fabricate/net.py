@@ -16,7 +16,7 @@ from dataclasses import replace
 
 from ..design import Design
 from ..errors import FabricationError
-from .labels import design_axis, reading_note
+from .labels import design_axis, placed_marks, reading_note
 from .text import MARKS
 from .unfold import TAB_WIDTH, Net, Page, pack_copies, parse_page, unfold
 
@@ -93,6 +93,7 @@ def render_net(
     sheets = layout_sheets(
         pack_copies(net, copies), labels=design.label_of, axis=design_axis(design), plan=plan,
         values=[f for f in design.label_of if f not in design.labels], face_names=face_names, mark=mark, pips=pips,
+        marks=placed_marks(design),
     )  # fmt: skip
     out: dict[str, bytes] = {}
     for fmt in formats:

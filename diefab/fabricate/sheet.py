@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from .labels import face_frame, fit_label, label_shape
+from .labels import MARK_FRACTION, face_frame, fit_label, label_shape, mark_frame
 from .text import Font, load_font, text_advance, text_outline
 from .unfold import Net
 
@@ -65,7 +65,8 @@ _LEGEND = (
 class Text:
     """A piece of text as drawn: its outline in page mm (y down).
 
-    kind : face, name, edge, tab or info.  height : digit/cap height, mm.
+    kind : face, corner (a value read at a corner), along-edge (one read along an edge), name, edge (an edge
+    letter), tab or info.  height : digit/cap height, mm.
     """
 
     text: str
@@ -244,8 +245,8 @@ def _face_map(net: Net, k: int, axis: np.ndarray):
     return page[0], m[0], m[1]
 
 
-def _die_texts(net: Net, labels: dict[str, str], axis, *, face_names, mark, pips, values, font, bold):
-    """Texts of one copy: edge letters, tab letters, face labels (page coordinates)."""
+def _die_texts(net: Net, labels: dict[str, str], axis, *, face_names, mark, pips, values, font, bold, marks=()):
+    """Texts of one copy: edge letters, tab letters, values at corners and edges, face labels (page coordinates)."""
     from shapely.geometry import Polygon
     from shapely.ops import polylabel
 
@@ -288,6 +289,21 @@ def _die_texts(net: Net, labels: dict[str, str], axis, *, face_names, mark, pips
         if size > 0.5:
             shape = _framed(_scaled(_letter(t.label, font), size, cx, cy), (p + q) / 2, d, up)
             out.append(Text(t.label, "tab", shape, names[t.face], size))
+
+    # values read at a corner or along an edge, in their corner of each face; the face labels keep clear of them
+    for m in marks:
+        k = poly.face_index(m.face)
+        ring = list(poly.faces[k])
+        zone, origin, xa, ya = mark_frame(net.faces[k], tuple(ring.index(v) for v in m.at), y_down=True)
+        whole = Polygon(net.faces[k])
+        region = zone.intersection(whole.buffer(-FACE_MARGIN, join_style="mitre"))
+        shape = label_shape(m.text, bold, others=labels.values(), mark=mark, pips=pips)
+        cap = MARK_FRACTION * 2 * whole.exterior.distance(polylabel(whole, 0.01))
+        height, cx, cy = fit_label(_unframed(region, origin, xa, ya), shape, cap)
+        if height > 0.5:
+            placed = _framed(_scaled(shape, height, cx, cy), origin, xa, ya)
+            out.append(Text(m.text, "corner" if len(m.at) == 1 else "along-edge", placed, m.face, height))
+            occupied[k].append(placed.buffer(LETTER_CLEARANCE))
 
     # face labels: fit each, then one height for all value labels
     fits = {}
@@ -385,6 +401,7 @@ def layout_sheets(
     face_names: bool = False,
     mark: str = "bar",
     pips: bool = False,
+    marks=(),
 ) -> list[Sheet]:
     """One :class:`Sheet` per page for the copies `nets` of one die (see :func:`~.unfold.pack_copies`).
 
@@ -396,6 +413,7 @@ def layout_sheets(
     values : faces whose labels are values, given one common height.
     face_names : print the small face names (f1, f2, ...) too.
     mark, pips : see :func:`~.labels.label_shape`.
+    marks : values read at a corner or along an edge (:func:`~.labels.placed_marks`).
     """
     from shapely import affinity
 
@@ -406,7 +424,7 @@ def layout_sheets(
     sheets = [Sheet(page.width, page.height, k + 1, n_pages) for k in range(n_pages)]
     font, bold = load_font(bold=False), load_font()
     texts = _die_texts(first, labels, axis, face_names=face_names, mark=mark, pips=pips, values=set(values),
-                       font=font, bold=bold)  # fmt: skip
+                       font=font, bold=bold, marks=marks)  # fmt: skip
     rings = _cut_rings(first)
     names = first.poly.names
     index = {name: k for k, name in enumerate(names)}

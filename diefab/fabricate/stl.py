@@ -60,7 +60,16 @@ from ..design import Design
 from ..errors import FabricationError
 from ..geometry import Polyhedron
 from ..mass import Fill, inset
-from .labels import design_axis, face_frame, fit_label, label_shape, small_die_warning
+from .labels import (
+    MARK_FRACTION,
+    design_axis,
+    face_frame,
+    fit_label,
+    label_shape,
+    mark_frame,
+    placed_marks,
+    small_die_warning,
+)
 from .text import Font, load_font, stroke_width, thin_fraction
 
 __all__ = [
@@ -84,6 +93,10 @@ MAX_DEPTH_FRACTION = 0.1
 ROUND_SEGMENTS = 32
 #: Share of a label's area that may be thinner than --min-stroke before a warning.
 THIN_AREA_WARNING = 0.1
+#: Gap kept between a value read at a corner or edge and the face's centred label, mm.
+MARK_CLEARANCE_MM = 0.6
+#: A value read at a corner or edge with less room than this (mm high) is left out, with a warning.
+MIN_MARK_MM = 0.8
 
 
 @dataclass(frozen=True, eq=False)
@@ -112,6 +125,9 @@ class Label:
         Origin of the face coordinates of `outline`.
     outline : shapely geometry
         The text in face coordinates (x along `baseline`, y along `up`), mm.
+    face_outline : shapely geometry or None
+        A value read at a corner or an edge: the text in the coordinates of
+        the face's centred label (its frame turns toward that corner).
     """
 
     face: str
@@ -127,6 +143,7 @@ class Label:
     normal: np.ndarray
     origin_mm: np.ndarray
     outline: Any = field(repr=False)
+    face_outline: Any = field(default=None, repr=False)
 
 
 @dataclass(frozen=True, eq=False)
@@ -382,7 +399,9 @@ def _place_label(
     min_height_mm: float,
     min_stroke_mm: float,
     max_height_mm: float = math.inf,
+    avoid=None,
 ) -> Label:
+    """Fit `text` centred on a face (ring, mm), clear of `avoid` (face coordinates: origin the ring's mean)."""
     from shapely import affinity
     from shapely.geometry import Polygon
 
@@ -390,6 +409,8 @@ def _place_label(
     origin = ring.mean(axis=0)
     face2d = Polygon(np.column_stack([(ring - origin) @ u, (ring - origin) @ v]))
     inner = face2d.buffer(-margin_mm, join_style="mitre")
+    if avoid is not None:
+        inner = inner.difference(avoid)
     if inner.is_empty or inner.area <= 0:
         raise FabricationError(
             f"label {text!r} does not fit on face {face}: the face is narrower than twice the margin "
@@ -418,6 +439,58 @@ def _place_label(
         normal=np.asarray(normal, dtype=float),
         origin_mm=origin,
         outline=outline,
+    )
+
+
+def _place_mark(poly, m, flat, axis, font, texts, mark, pips, margin_mm, min_stroke_mm, scale) -> Label | None:
+    """A value read at a corner or along an edge (:class:`~diefab.readings.Marking` `m`) on its face, as a Label.
+
+    The text lies in the face shrunk toward that corner or the edge's middle
+    (:func:`~.labels.mark_frame`), its top toward it, at most
+    :data:`~.labels.MARK_FRACTION` of the face's inscribed diameter high;
+    None where less than :data:`MIN_MARK_MM` fits.
+    """
+    from shapely import affinity
+    from shapely.geometry import Polygon
+    from shapely.ops import polylabel
+
+    k = poly.face_index(m.face)
+    ring = flat[k]
+    if ring is None:
+        raise FabricationError(f"value {m.text!r} does not fit on face {m.face}: rounding left no flat part")
+    u, v = face_frame(ring, poly.normals[k], axis)
+    origin = ring.mean(axis=0)
+    ring2 = np.column_stack([(ring - origin) @ u, (ring - origin) @ v])
+    # the named corners, on the flat part of a rounded face: its nearest corners
+    at = tuple(int(np.argmin(np.linalg.norm(ring - poly.vertices[w] * scale, axis=1))) for w in m.at)
+    zone, anchor, xa, ya = mark_frame(ring2, at)
+    face2d = Polygon(ring2)
+    region = zone.intersection(face2d.buffer(-margin_mm, join_style="mitre"))
+    to_text = [xa[0], xa[1], ya[0], ya[1], -float(anchor @ xa), -float(anchor @ ya)]
+    glyphs = label_shape(m.text, font, others=texts.values(), mark=mark, pips=pips)
+    cap = MARK_FRACTION * 2 * face2d.exterior.distance(polylabel(face2d, 0.01))
+    height, cx, cy = fit_label(affinity.affine_transform(region, to_text), glyphs, cap)
+    if height < MIN_MARK_MM:
+        return None
+    outline = affinity.translate(affinity.scale(glyphs, height, height, origin=(0, 0)), cx, cy)
+    baseline, up = xa[0] * u + xa[1] * v, ya[0] * u + ya[1] * v
+    at_mm = origin + anchor[0] * u + anchor[1] * v
+    c2 = outline.centroid
+    return Label(
+        face=m.face,
+        text=m.text,
+        height_mm=float(height),
+        stroke_mm=float(stroke_width(glyphs) * height),
+        thin_fraction=thin_fraction(outline, min_stroke_mm),
+        area_mm2=float(outline.area),
+        center_mm=at_mm + cx * baseline + cy * up,
+        centroid_mm=at_mm + c2.x * baseline + c2.y * up,
+        baseline=baseline,
+        up=up,
+        normal=np.asarray(poly.normals[k], dtype=float),
+        origin_mm=at_mm,
+        outline=outline,
+        face_outline=affinity.affine_transform(outline, [xa[0], ya[0], xa[1], ya[1], anchor[0], anchor[1]]),
     )
 
 
@@ -475,6 +548,7 @@ def build_solid(
     uniform_height: bool = True,
     mark: str = "bar",
     pips: bool = False,
+    with_marks: bool = True,
 ) -> Solid:
     """The printable die: hull (rounded if asked), labels engraved or embossed, checked and measured.
 
@@ -520,6 +594,10 @@ def build_solid(
         marked (a 6 on a die that also has a 9).
     pips : bool
         Show value labels 1 to 9 as pips.
+    with_marks : bool
+        Also engrave the values read at a corner or along an edge
+        (:func:`~.labels.placed_marks`, e.g. the gem's apex), in that corner
+        or along that edge of every face that holds it.
 
     Returns
     -------
@@ -610,13 +688,33 @@ def build_solid(
     texts = design.label_of
     shapes = {face: label_shape(t, font, others=texts.values(), mark=mark, pips=pips) for face, t in texts.items()}
 
+    marks, placed = [], []
+    for m in placed_marks(design) if with_marks else []:
+        label = _place_mark(poly, m, flat, axis, font, texts, mark, pips,
+                            margin_mm + depth_mm * cots[poly.face_index(m.face)], min_stroke_mm, scale)  # fmt: skip
+        where = f"value {m.text!r} at {'its corner' if len(m.at) == 1 else 'its edge'} of face {m.face}"
+        if label is None:
+            warnings.append(f"{where} does not fit and is not engraved: use a larger --size")
+            continue
+        if label.height_mm < min_text_height_mm:
+            warnings.append(
+                f"{where} is {label.height_mm:.2f} mm high, under the minimum text height {min_text_height_mm:g} mm"
+            )
+        marks.append(label)
+        placed.append(m)
+    avoid: dict[str, Any] = {}
+    for label in marks:
+        keep_clear = label.face_outline.buffer(MARK_CLEARANCE_MM)
+        avoid[label.face] = keep_clear if label.face not in avoid else avoid[label.face].union(keep_clear)
+    labelled |= set(avoid)
+
     def place(face: str, text: str, cap: float = math.inf) -> Label:
         k = poly.face_index(face)
         if flat[k] is None:
             raise FabricationError(f"label {text!r} does not fit on face {face}: rounding left no flat part")
         return _place_label(
             face, text, flat[k], poly.normals[k], axis, shapes[face],
-            margin_mm + depth_mm * cots[k], min_text_height_mm, min_stroke_mm, cap,
+            margin_mm + depth_mm * cots[k], min_text_height_mm, min_stroke_mm, cap, avoid.get(face),
         )  # fmt: skip
 
     fitted = {face: place(face, text) for face, text in texts.items()}
@@ -624,7 +722,7 @@ def build_solid(
     if uniform_height and values:
         common = min(fitted[face].height_mm for face in values)
         fitted.update({face: place(face, fitted[face].text, common) for face in values})
-    labels = list(fitted.values())
+    labels = list(fitted.values()) + marks
     warnings.extend(_stroke_warnings(labels, min_stroke_mm))
     # embossed labels must not stand the print on its bed face: that one is engraved
     raised = [emboss and label.face != bed_name for label in labels]
@@ -786,7 +884,7 @@ def build_solid(
         "com_shift_norm_mm": float(np.linalg.norm(com_solid - com_uncut)),
         "infill_com_shift_mm": (com_print - com_solid).tolist(),
         "infill_com_shift_norm_mm": float(np.linalg.norm(com_print - com_solid)),
-        "labels": {label.face: label.text for label in labels},
+        "labels": {label.face: label.text for label in fitted.values()},
         "label_details": {
             label.face: {
                 "text": label.text,
@@ -797,8 +895,19 @@ def build_solid(
                 "center_mm": label.center_mm.tolist(),
                 "up": label.up.tolist(),
             }
-            for label in labels
+            for label in fitted.values()
         },
+        "marks": [
+            {
+                "face": label.face,
+                "text": label.text,
+                "at": [int(v) for v in m.at],
+                "height_mm": label.height_mm,
+                "center_mm": label.center_mm.tolist(),
+                "up": label.up.tolist(),
+            }
+            for label, m in zip(marks, placed)
+        ],  # fmt: skip
         "landing_model": "solid-angle" if round_mm == 0 else "solid-angle of the flat faces",
         "probabilities": predictions,
         "probability_change": {
@@ -814,8 +923,8 @@ def build_solid(
             poly.names[k]: 0.0 if ring is None else _ring_area(ring) for k, ring in enumerate(flat)
         }
     report["bed_face"] = bed_name
-    report["embossed"] = [label.face for label, up in zip(labels, raised) if up]
-    report["engraved"] = [label.face for label, up in zip(labels, raised) if not up]
+    report["embossed"] = list(dict.fromkeys(label.face for label, up in zip(labels, raised) if up))
+    report["engraved"] = list(dict.fromkeys(label.face for label, up in zip(labels, raised) if not up))
     return Solid(
         design, vertices, triangles, label_tri, tuple(labels), report, tuple(warnings),
         _rotation_to_down(poly.normals[bed_index]), _mesh_arrays(base), inlay,

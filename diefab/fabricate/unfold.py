@@ -26,6 +26,7 @@ Examples
 
 from __future__ import annotations
 
+import heapq
 import itertools
 import math
 import re
@@ -69,6 +70,10 @@ PAIR_BUDGET = 4e7
 #: Finalists (the layouts with the smallest faces-only footprint) whose tabs are
 #: built and whose exact bounding rectangle is measured.
 MAX_FINALISTS = 25
+#: Trees grown into pieces when no single piece fits, and the face count over which fewer are tried
+#: (a tree's pieces cost time in proportion to the faces).
+SPLIT_TREES = 12
+SPLIT_FACES = 2400
 #: Gap between pieces on a page, mm.
 PIECE_GAP = 4.0
 _GRID = np.deg2rad(np.arange(0.0, 180.0, 1.0))
@@ -559,9 +564,6 @@ def _free_angle(point, direction, shapes) -> float:
 def _place_tabs(polys, piece_of, cut_copies, width):
     """Greedy tabs: for every cut edge the widest shape, on either copy, that overlaps nothing in its piece.
 
-    Each end of a tab leans in by at most 45 degrees and by less where a
-    neighbouring face or tab leaves less room at that vertex.
-
     polys : list of (k, 2) arrays (layout coordinates); cut_copies : list of
     (edge, [(face, p, q), (face, p, q)]).  Returns ``(tabs, None)`` with
     (edge, face, polygon) per cut edge, or ``(partial, edge)`` naming the
@@ -569,39 +571,100 @@ def _place_tabs(polys, piece_of, cut_copies, width):
     """
     if width == 0:
         return [], None
-    pad = max(len(p) for p in polys)
-    faces = np.array([np.concatenate([p, np.repeat(p[-1:], pad - len(p), axis=0)]) for p in polys])
-    placed: list[tuple[int, int, np.ndarray]] = []
+    tabs = _Tabs(polys, piece_of, width)
     for e, copies in cut_copies:
-        done = False
+        if not tabs.place(e, copies):
+            return tabs.placed, e
+    return tabs.placed, None
+
+
+class _Tabs:
+    """Glue tabs placed one cut edge at a time on a layout whose pieces may still be split.
+
+    Each end of a tab leans in by at most 45 degrees and by less where a
+    neighbouring face or tab leaves less room at that vertex.  A tab is
+    tested only against the shapes of its piece that a :class:`_Grid`
+    finds near it, so a die with hundreds of faces costs about as much per
+    edge as a small one.  `piece_of` is read at every test: a caller may
+    move faces (with their tabs) to a new piece between placements, and the
+    tabs already placed stay valid, since a piece only ever loses shapes.
+    """
+
+    def __init__(self, polys: list[np.ndarray], piece_of: np.ndarray, width: float) -> None:
+        self.piece_of, self.width = piece_of, width
+        self.shapes = list(polys)  # faces first, then the tabs as they are placed
+        self.owner = list(range(len(polys)))  # the face each shape belongs to
+        self.grid = _Grid(_cell_size(polys))
+        for k, p in enumerate(polys):
+            self.grid.add(k, p)
+        self.placed: list[tuple[int, int, np.ndarray]] = []
+
+    def _near(self, piece: int, points: np.ndarray, pad: float = 0.0) -> list[np.ndarray]:
+        return [self.shapes[i] for i in self.grid.near(points, pad) if self.piece_of[self.owner[i]] == piece]
+
+    def place(self, e: int, copies) -> bool:
+        """Place the widest tab that fits on cut edge `e` (copies: (face, p, q) each); False if none does."""
         for factor in (1.0, 0.6, 0.35):
             for face, p, q in copies:
-                same = np.flatnonzero(piece_of == piece_of[face])
-                others = [t for _, f, t in placed if piece_of[f] == piece_of[face]]
-                shapes = [polys[g] for g in same] + others
+                piece = self.piece_of[face]
+                ends = self._near(piece, np.array([p, q]), pad=1e-6)
                 u = (q - p) / np.hypot(*(q - p))
                 # room at p turning clockwise from p->q, at q turning counter-clockwise from q->p
-                free_p = _free_angle(p, u, shapes)
-                free_q = _free_angle_ccw(q, -u, shapes)
-                ap = math.degrees(min(math.pi / 4, 0.9 * free_p))
-                aq = math.degrees(min(math.pi / 4, 0.9 * free_q))
+                ap = math.degrees(min(math.pi / 4, 0.9 * _free_angle(p, u, ends)))
+                aq = math.degrees(min(math.pi / 4, 0.9 * _free_angle_ccw(q, -u, ends)))
                 if min(ap, aq) < 3:
                     continue
-                tab = _trapezoid(p, q, factor * width, ap, aq)
+                tab = _trapezoid(p, q, factor * self.width, ap, aq)
                 if tab is None:
                     continue
-                if _overlap(faces[same], tab).any():
+                near = self._near(piece, tab)
+                if near and _overlap(_stack(near), tab).any():
                     continue
-                if others and _overlap(np.array(others), tab).any():
-                    continue
-                placed.append((e, face, tab))
-                done = True
-                break
-            if done:
-                break
-        if not done:
-            return placed, e
-    return placed, None
+                self.grid.add(len(self.shapes), tab)
+                self.shapes.append(tab)
+                self.owner.append(face)
+                self.placed.append((e, face, tab))
+                return True
+        return False
+
+
+class _Grid:
+    """Shapes filed by their bounding boxes in square cells: which of them may meet a query box.
+
+    A spatial index that grows as shapes are added (tabs are placed one
+    by one), unlike a bulk-loaded R-tree.
+    """
+
+    def __init__(self, cell: float) -> None:
+        self.cell = cell
+        self.cells: dict[tuple[int, int], list[int]] = {}
+
+    def _span(self, points: np.ndarray, pad: float):
+        lo = np.floor((points.min(axis=0) - pad) / self.cell).astype(int)
+        hi = np.floor((points.max(axis=0) + pad) / self.cell).astype(int)
+        return itertools.product(range(lo[0], hi[0] + 1), range(lo[1], hi[1] + 1))
+
+    def add(self, key: int, points: np.ndarray) -> None:
+        for c in self._span(points, 0.0):
+            self.cells.setdefault(c, []).append(key)
+
+    def near(self, points: np.ndarray, pad: float = 0.0) -> list[int]:
+        """Keys of the shapes whose cells meet the bounding box of `points` grown by `pad`, increasing."""
+        out: set[int] = set()
+        for c in self._span(points, pad):
+            out.update(self.cells.get(c, ()))
+        return sorted(out)
+
+
+def _cell_size(polys: list[np.ndarray]) -> float:
+    """A grid cell about the size of a typical face, mm."""
+    return max(float(np.median([np.ptp(p, axis=0).max() for p in polys])), 1e-3)
+
+
+def _stack(shapes: list[np.ndarray]) -> np.ndarray:
+    """(n, K, 2): polygons of different lengths, short ones padded by repeating their last vertex."""
+    k = max(len(p) for p in shapes)
+    return np.array([p if len(p) == k else np.concatenate([p, np.repeat(p[-1:], k - len(p), axis=0)]) for p in shapes])
 
 
 def _free_angle_ccw(point, direction, shapes) -> float:
@@ -728,7 +791,8 @@ def unfold(
     stats["finalists"] = tried
     if best is None:
         # split: grow pieces along the trees with the smallest footprint, keep the fewest pieces
-        for t in np.argsort(n_clash * 1e12 + est, kind="stable")[: 12 if search else 1]:
+        n_split = max(1, min(SPLIT_TREES, int(SPLIT_FACES / m))) if search else 1
+        for t in np.argsort(n_clash * 1e12 + est, kind="stable")[:n_split]:
             layout = _split(poly, trees[t], world[t], roots[t], tab_width, printable)
             if layout is not None and (
                 best is None or (len(layout.fits), layout.key[0]) < (len(best.fits), best.key[0])
@@ -764,29 +828,51 @@ def _split(poly, tree, world_t, rooting, tab_width, printable) -> _Layout | None
     m = len(poly.faces)
     polys = [world_t[k, : len(poly.faces[k])] for k in range(m)]
     piece_of = np.full(m, -1, dtype=np.intp)
+    cell = _cell_size(polys)
+    grids: list[_Grid] = []
+    hulls: list[np.ndarray] = []  # each piece's convex hull so far: its fit is the fit of all its faces
     n_pieces = 0
     for f in order:
         p = int(parent[f])
         if p != f:
-            members = np.flatnonzero(piece_of == piece_of[p])
-            if not any(_overlap(polys[g], polys[f]) for g in members):
-                pts = np.concatenate([polys[g] for g in members] + [polys[f]])
+            k = int(piece_of[p])
+            near = grids[k].near(polys[f])
+            if not (near and _overlap(_stack([polys[g] for g in near]), polys[f]).any()):
+                pts = np.concatenate([hulls[k], polys[f]])
                 if _fit(pts, printable, margin=tab_width) is not None:
-                    piece_of[f] = piece_of[p]
+                    piece_of[f] = k
+                    grids[k].add(f, polys[f])
+                    hulls[k] = _hull(pts)
                     continue
         piece_of[f] = n_pieces
+        grids.append(_Grid(cell))
+        grids[-1].add(f, polys[f])
+        hulls.append(polys[f])
         n_pieces += 1
-    tree_set = set(tree)
+    children: list[list[int]] = [[] for _ in range(m)]
+    for f in range(m):
+        if parent[f] != f:
+            children[int(parent[f])].append(f)
+    at_vertex: dict[int, list[int]] = {}
+    for k, ring in enumerate(poly.faces):
+        for v in ring.tolist():
+            at_vertex.setdefault(v, []).append(k)
+    # tabs longest edge first; an edge that takes none detaches a face next to it, with its subtree, into a
+    # piece of its own (the fold it hung from is cut and queued) and is tried again
     ef = poly.edge_faces
-    for _ in range(2 * m):
-        folds = [e for e in tree_set if piece_of[ef[e, 0]] == piece_of[ef[e, 1]]]
-        cut = sorted(set(range(len(poly.edges))) - set(folds))
-        tabs, failed = _place_tabs(polys, piece_of, _cut_copies(poly, polys, cut), tab_width)
-        if failed is None:
+    folds = {e for e in tree if piece_of[ef[e, 0]] == piece_of[ef[e, 1]]}
+    copies = dict(_cut_copies(poly, polys, list(range(len(poly.edges)))))
+    queue = [(-round(float(np.hypot(*(c[0][2] - c[0][1]))), 6), e) for e, c in copies.items() if e not in folds]
+    heapq.heapify(queue)
+    tabs = _Tabs(polys, piece_of, tab_width)
+    for _ in range(m + len(copies) + 1):
+        if not queue or tab_width == 0:
             break
-        # detach a face of the failing edge, or else another face around its ends, with its subtree
-        ends = set(poly.edges[failed].tolist())
-        around = [k for k in range(m) if k not in ef[failed] and ends & set(poly.faces[k].tolist())]
+        length, failed = queue[0]
+        if tabs.place(failed, copies[failed]):
+            heapq.heappop(queue)
+            continue
+        around = sorted({k for v in poly.edges[failed].tolist() for k in at_vertex[v]} - set(ef[failed].tolist()))
         pieces = {int(piece_of[k]) for k in ef[failed]}
         movable = [
             int(f)
@@ -800,10 +886,14 @@ def _split(poly, tree, world_t, rooting, tab_width, printable) -> _Layout | None
         while stack:
             g = stack.pop()
             piece_of[g] = n_pieces
-            stack.extend(int(h) for h in np.flatnonzero((parent == g) & (piece_of == old)) if h != g)
+            stack.extend(h for h in children[g] if piece_of[h] == old)
         n_pieces += 1
+        hinge = next(e for e in folds if set(ef[e].tolist()) == {f, int(parent[f])})
+        folds.discard(hinge)
+        heapq.heappush(queue, (-round(float(np.hypot(*(copies[hinge][0][2] - copies[hinge][0][1]))), 6), hinge))
     else:
         return None
+    tabs = tabs.placed
     fits = []
     for k in range(n_pieces):
         pts = np.concatenate(
