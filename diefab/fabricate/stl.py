@@ -402,7 +402,6 @@ def _place_label(
     avoid=None,
 ) -> Label:
     """Fit `text` centred on a face (ring, mm), clear of `avoid` (face coordinates: origin the ring's mean)."""
-    from shapely import affinity
     from shapely.geometry import Polygon
 
     u, v = face_frame(ring, normal, axis)
@@ -423,6 +422,13 @@ def _place_label(
             f"label {text!r} does not fit on face {face}: at most {fitted:.2f} mm high, "
             f"below the minimum text height {min_height_mm:g} mm (use a larger --size or a shorter label)"
         )
+    return _fitted_label(face, text, glyphs, height, cx, cy, origin, u, v, normal, min_stroke_mm)
+
+
+def _fitted_label(face, text, glyphs, height, cx, cy, origin, baseline, up, normal, min_stroke_mm) -> Label:
+    """The :class:`Label` of `glyphs` scaled to `height` at (cx, cy) in the frame (`origin`, `baseline`, `up`)."""
+    from shapely import affinity
+
     outline = affinity.translate(affinity.scale(glyphs, height, height, origin=(0, 0)), cx, cy)
     c2 = outline.centroid
     return Label(
@@ -432,10 +438,10 @@ def _place_label(
         stroke_mm=float(stroke_width(glyphs) * height),
         thin_fraction=thin_fraction(outline, min_stroke_mm),
         area_mm2=float(outline.area),
-        center_mm=origin + cx * u + cy * v,
-        centroid_mm=origin + c2.x * u + c2.y * v,
-        baseline=u,
-        up=v,
+        center_mm=origin + cx * baseline + cy * up,
+        centroid_mm=origin + c2.x * baseline + c2.y * up,
+        baseline=baseline,
+        up=up,
         normal=np.asarray(normal, dtype=float),
         origin_mm=origin,
         outline=outline,
@@ -472,26 +478,11 @@ def _place_mark(poly, m, flat, axis, font, texts, mark, pips, margin_mm, min_str
     height, cx, cy = fit_label(affinity.affine_transform(region, to_text), glyphs, cap)
     if height < MIN_MARK_MM:
         return None
-    outline = affinity.translate(affinity.scale(glyphs, height, height, origin=(0, 0)), cx, cy)
     baseline, up = xa[0] * u + xa[1] * v, ya[0] * u + ya[1] * v
     at_mm = origin + anchor[0] * u + anchor[1] * v
-    c2 = outline.centroid
-    return Label(
-        face=m.face,
-        text=m.text,
-        height_mm=float(height),
-        stroke_mm=float(stroke_width(glyphs) * height),
-        thin_fraction=thin_fraction(outline, min_stroke_mm),
-        area_mm2=float(outline.area),
-        center_mm=at_mm + cx * baseline + cy * up,
-        centroid_mm=at_mm + c2.x * baseline + c2.y * up,
-        baseline=baseline,
-        up=up,
-        normal=np.asarray(poly.normals[k], dtype=float),
-        origin_mm=at_mm,
-        outline=outline,
-        face_outline=affinity.affine_transform(outline, [xa[0], ya[0], xa[1], ya[1], anchor[0], anchor[1]]),
-    )
+    label = _fitted_label(m.face, m.text, glyphs, height, cx, cy, at_mm, baseline, up, poly.normals[k], min_stroke_mm)
+    face_outline = affinity.affine_transform(label.outline, [xa[0], ya[0], xa[1], ya[1], anchor[0], anchor[1]])
+    return replace(label, face_outline=face_outline)
 
 
 def _cutter(label: Label, depth_mm: float, emboss: bool):
