@@ -393,10 +393,10 @@ def _two_class_design(
         d = build(value)
         return float(model_probabilities(rank, d.polyhedron, d.mass_properties(), d.fill)[: plan.n].sum())
 
-    start = plan.params[[k for k in plan.params if k != "n"][0]]
+    start = next(v for k, v in plan.params.items() if k != "n")  # the fair shape's height or slope
     grid = np.linspace(lo, hi, 81)
     # the shapes around the fair one that stay steady: tuning never leaves them
-    steady = np.array([tipping_angle(build(v).polyhedron, build(v).mass_properties().center) for v in grid])
+    steady = np.array([tipping_angle(d.polyhedron, d.mass_properties().center) for d in map(build, grid)])
     steady = steady >= STEADY_TIPPING
     i0 = int(np.argmin(np.abs(grid - start)))
     a, b = i0, i0
