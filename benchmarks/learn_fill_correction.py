@@ -28,10 +28,15 @@ tabs), the counts no longer describe these dice and the script stops.
 
 Usage::
 
-    nice -n 10 python benchmarks/learn_fill_correction.py --fill paper --seed 606 --designs 120 --drops 1000 --workers 1
-    nice -n 10 python benchmarks/learn_fill_correction.py --fill print --seed 606 --designs 60 --drops 1000 \\
+    nice -n 10 python benchmarks/learn_fill_correction.py --fill paper --seed 607 --designs 30 --drops 1000 \\
+        --extra-set train-paper-606 --workers 1
+    nice -n 10 python benchmarks/learn_fill_correction.py --fill print --seed 606 --designs 27 --drops 1000 \\
         --extra-set train-print --workers 1
     python benchmarks/learn_fill_correction.py --fill shell --designs 0 --extra-set test-404-shell
+
+(the packaged corrections; ``train-paper-606`` holds 61 paper gems simulated
+with the former, asymmetric tab layout, ``train-print`` 26 printed gems of
+design seed 404 at 2,000-5,000 drops).
 
 Measure the result on gems of another seed with ``bench_fastmodel.py --fill FILL --test-seed 707``.
 """
