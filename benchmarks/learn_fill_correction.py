@@ -75,6 +75,12 @@ BODY_CHECKS = 3
 BODY_TOLERANCE = 1e-6
 
 
+def fail(message: str) -> None:
+    """One line on stderr and exit status 2."""
+    print(message, file=sys.stderr)
+    raise SystemExit(2)
+
+
 class FillData:
     """Training gems of one fill: what the correction is learned from."""
 
@@ -130,7 +136,7 @@ def check_bodies(designs: list, runs: list[dict], k: int = BODY_CHECKS) -> None:
         center, inertia = np.array(r["body"]["center"]), np.array(r["body"]["inertia"])
         moved = max(np.abs(body.center - center).max(), np.abs(body.inertia / body.mass - inertia).max())
         if moved > BODY_TOLERANCE:
-            sys.exit(f"learn_fill_correction: the {d.fill.kind} body of gem {dict(d.params)} is not the one it "
+            fail(f"learn_fill_correction: the {d.fill.kind} body of gem {dict(d.params)} is not the one it "
                      f"was simulated with (off by {moved:.2g}): the body model has changed; simulate again "
                      "(a new --seed) before learning")  # fmt: skip
 
@@ -158,7 +164,7 @@ def cached_set(name: str, kind: str, cache: dict) -> tuple[list, list[dict]]:
         designs.append(d)
         runs.append(r)
     if not designs:
-        sys.exit(f"learn_fill_correction: no {kind} gems of set {name!r} in the cache")
+        fail(f"learn_fill_correction: no {kind} gems of set {name!r} in the cache")
     return designs, runs
 
 
@@ -217,6 +223,9 @@ def main(argv=None) -> None:
         designs, runs = designs + d, runs + r
     if args.collect_only:
         return
+    if len(designs) < 2 * FOLDS:
+        fail(f"learn_fill_correction: {len(designs)} gems are too few to cross-validate; give --designs or "
+                 "--extra-set")  # fmt: skip
     # the gems this command draws (or the first extra set) must still be what the code builds; extra sets
     # are taken with the bodies they were simulated with, which the correction takes as inputs
     check_bodies(designs[:checked], runs[:checked])
