@@ -986,6 +986,7 @@ def unfold(
     stats["pieces"] = len(best.fits)
     stats["tab_offset_mm"] = best.offset
     stats["tab_symmetries"] = best.kept if len(group) > 1 else 1
+    stats["symmetric_about"] = group.fixed_set
     return _finish(poly, mm_per_unit, page, best, stats)
 
 
