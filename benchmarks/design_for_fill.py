@@ -22,7 +22,13 @@ With ``--refit near`` the re-fit is a damped Gauss-Newton step instead of a
 new optimum: the least-squares fit of the corrected fast model's value
 probabilities to 4dF nearest the current die, at most ``--max-step`` away
 in the unit cube of the parameters, so the die stays where the correction
-was measured (the fast model's error changes with the shape).  Every round records the
+was measured (the fast model's error changes with the shape).  With
+``--refit simulated`` the slope comes from the simulation itself: the die
+and the die moved by ``--fd-step`` in each free parameter (unit cube) are
+dropped with the same seed (common random numbers, so the difference is
+not swamped by sampling noise), and the damped least-squares step on the
+mirror-averaged value probabilities uses that Jacobian: no fast model at
+all, for where its slope is wrong.  Every round records the
 body's centre of mass, and a round whose body, recomputed now, has moved
 (another tab layout, another print model) is left out of the pool.  The last design is written as
 ``fudge-gem-FILL.toml`` (the fill's default settings: 160 g/m² card with
@@ -89,7 +95,7 @@ def refit_near(design, correction: np.ndarray, read_by, min_margin: float, max_s
     from scipy.optimize import least_squares
 
     from diefab.families import family
-    from diefab.optimize import INFEASIBLE, Problem
+    from diefab.optimize import Problem
 
     names = family(design.family).free_names(design.params)
     problem = Problem(design, tuple(names), "fast", "tvd", min_margin, correction, tuple(read_by))
@@ -102,15 +108,51 @@ def refit_near(design, correction: np.ndarray, read_by, min_margin: float, max_s
         return np.concatenate([miss, 0.05 * (x - x0)])
 
     x1 = least_squares(residual, x0, bounds=(0.0, 1.0), diff_step=1e-4).x
-    step = x1 - x0
-    step *= min(1.0, max_step / max(float(np.linalg.norm(step)), 1e-12))
+    return _damped(design, problem, x0, x1 - x0, max_step)
+
+
+def _damped(design, problem, x0: np.ndarray, step: np.ndarray, max_step: float):
+    """`design` moved by `step` (unit cube), cut to `max_step` and halved until it stands and reads as made."""
+    from diefab.optimize import INFEASIBLE
+
+    step = step * min(1.0, max_step / max(float(np.linalg.norm(step)), 1e-12))
     for _ in range(8):
         if problem.evaluate(problem.params(x0 + step))[0] < INFEASIBLE:
-            break
-        step /= 2
-    else:
-        step = np.zeros_like(step)
-    return design.with_params(**problem.params(x0 + step))
+            return design.with_params(**problem.params(x0 + step))
+        step = step / 2
+    return design
+
+
+def refit_simulated(design, counts: np.ndarray, dropped, read_by, min_margin: float, max_step: float, h: float):
+    """A damped Gauss-Newton step along the simulated slope (common random numbers).
+
+    `counts` are the die's face counts with some seed, `dropped(die)` drops
+    another die with that same seed.  Each free parameter is moved by `h`
+    in the unit cube (backwards at the upper bound); the Jacobian of the
+    mirror-averaged value probabilities is the difference quotient.
+    """
+    from diefab.families import family
+    from diefab.optimize import Problem
+
+    names = family(design.family).free_names(design.params)
+    problem = Problem(design, tuple(names), "fast", "tvd", min_margin, None, tuple(read_by))
+    goal = design.target_distribution.aligned(design.support)
+    x0 = problem.unit(design.params)
+
+    def values(die, c):
+        v = to_values(die, c / c.sum())
+        return (v + v[::-1]) / 2  # 4dF's mirror values: the symmetric gem cannot tell them apart
+
+    v0 = values(design, counts)
+    jac = np.empty((len(v0), len(names)))
+    for i in range(len(names)):
+        dx = np.zeros(len(names))
+        dx[i] = h if x0[i] + h <= 1 else -h
+        die = design.with_params(**problem.params(x0 + dx))
+        jac[:, i] = (values(die, dropped(die)) - v0) / dx[i]
+    lam = 0.05**2  # the same small pull towards the current die as refit_near's
+    step = -np.linalg.solve(jac.T @ jac + lam * np.eye(len(names)), jac.T @ (v0 - goal))
+    return _damped(design, problem, x0, step, max_step)
 
 
 def main() -> None:
@@ -129,8 +171,10 @@ def main() -> None:
     ap.add_argument("--start", type=Path, default=None, help="continue from this design file (skip the fast optimum)")
     ap.add_argument("--pool-radius", type=float, default=float("inf"),
                     help="--pool fill: only dice with every parameter within this of the current die's")  # fmt: skip
-    ap.add_argument("--refit", choices=("optimum", "near"), default="optimum",
-                    help="re-fit to the corrected model's optimum, or a damped step towards it")  # fmt: skip
+    ap.add_argument("--refit", choices=("optimum", "near", "simulated"), default="optimum",
+                    help="re-fit to the corrected model's optimum, a damped step towards it, or a damped step "
+                         "along the simulated slope")  # fmt: skip
+    ap.add_argument("--fd-step", type=float, default=0.05, help="--refit simulated: finite-difference step, unit cube")
     ap.add_argument("--max-step", type=float, default=0.05, help="--refit near: largest step, unit cube")
     ap.add_argument("--read-by", default="face,vertex",
                     help="reading conventions a value may use (net and stl mark faces and the gem's apex)")  # fmt: skip
@@ -151,14 +195,19 @@ def main() -> None:
     correction = np.zeros(len(design.polyhedron.faces))
     history = []
     rounds_file = args.rounds_file or args.out / f"fudge-gem-{args.fill}-rounds.jsonl"  # one simulation a line
-    for k in range(args.rounds):
-        result = simulate(design, args.drops, seed=args.seed + k, workers=args.workers)
-        counts = np.asarray(result.face_counts, dtype=float)
+
+    def drop(die, seed: int) -> np.ndarray:
+        """Face counts of `die` dropped `--drops` times with `seed`, kept in the rounds file."""
+        result = simulate(die, args.drops, seed=seed, workers=args.workers)
         with rounds_file.open("a", encoding="utf-8") as f:
-            f.write(json.dumps({"fill": design.fill.to_mapping(), "params": dict(design.params), "drops": args.drops,
-                                "seed": args.seed + k, "face_counts": result.face_counts.tolist(),
+            f.write(json.dumps({"fill": die.fill.to_mapping(), "params": dict(die.params), "drops": args.drops,
+                                "seed": seed, "face_counts": result.face_counts.tolist(),
                                 "cocked": result.cocked, "unsettled": result.unsettled,
-                                "center": design.mass_properties().center.tolist()}) + "\n")  # fmt: skip
+                                "center": die.mass_properties().center.tolist()}) + "\n")  # fmt: skip
+        return np.asarray(result.face_counts, dtype=float)
+
+    for k in range(args.rounds):
+        counts = drop(design, args.seed + k)
         kept = [r for r in map(json.loads, rounds_file.read_text(encoding="utf-8").splitlines())
                 if r["fill"] == design.fill.to_mapping()
                 and (args.pool == "fill" or r["params"] == dict(design.params))
@@ -180,6 +229,11 @@ def main() -> None:
             out = np.clip(fast_model(poly, center, fill=fill, inertia=inertia) + r, 0, None)
             return out / out.sum()
 
+        if args.refit == "simulated":
+            design = refit_simulated(design, counts, lambda die, s=args.seed + k: drop(die, s), read_by,
+                                     args.min_margin, args.max_step, args.fd_step)  # fmt: skip
+            print("  step: " + " ".join(f"{k}={v:.4f}" for k, v in design.params.items()), flush=True)
+            continue
         if args.refit == "near":
             design = refit_near(design, correction, read_by, args.min_margin, args.max_step)
             print("  step: " + " ".join(f"{k}={v:.4f}" for k, v in design.params.items()), flush=True)
