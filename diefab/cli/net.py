@@ -85,7 +85,7 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
         tabs += f" (their centre {the_net.search['tab_offset_mm']:.2f} mm off the die's symmetry {about})"
     dice = f"{copies} dice, " if copies > 1 else ""
     click.echo(
-        f"{d.name}: {size:g} mm die ({d.size_note}), {dice}{pieces} each, {tabs}, on {n_pages} "
+        f"{d.name}: {size:g} mm die ({d.size_note}), {dice}{pieces}, {tabs}, on {n_pages} "
         f"{sheet.name} page{'s' * (n_pages > 1)}\nto read it: {reading_note(d)}"
     )
     click.echo(balance.summary())
