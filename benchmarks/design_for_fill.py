@@ -179,6 +179,11 @@ def main() -> None:
     ap.add_argument("--read-by", default="face,vertex",
                     help="reading conventions a value may use (net and stl mark faces and the gem's apex)")  # fmt: skip
     args = ap.parse_args()
+    for name in ("rounds", "drops", "max_step", "fd_step", "pool_radius"):
+        if not getattr(args, name) > 0:
+            ap.error(f"--{name.replace('_', '-')} must be positive, got {getattr(args, name)}")
+    if args.fd_step > 0.5:
+        ap.error(f"--fd-step must be at most 0.5 (unit cube), got {args.fd_step}")
 
     read_by = tuple(args.read_by.split(","))
     base = load_design("fudge-gem-sim")
@@ -258,7 +263,9 @@ def main() -> None:
     start = f" --start {args.start}" if args.start else ""
     comment = (
         f"Written by: python benchmarks/design_for_fill.py --fill {args.fill} --rounds {args.rounds} "
-        f"--drops {args.drops} --seed {args.seed} --pool {args.pool}{start}\nsimulated TVD {best_tvd:.4f} in its round"
+        f"--drops {args.drops} --seed {args.seed} --pool {args.pool} --pool-radius {args.pool_radius:g} "
+        f"--refit {args.refit} --max-step {args.max_step:g} --fd-step {args.fd_step:g}{start}\n"
+        f"simulated TVD {best_tvd:.4f} in its round"
     )
     path = args.out / f"{final.name}.toml"
     path.write_text(design_to_toml(final, comment=comment), encoding="utf-8")
