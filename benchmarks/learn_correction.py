@@ -3,7 +3,7 @@
 Two steps, each resumable:
 
 ``--collect``  draws ``--designs`` random dice (:func:`diefab.families.sampling.random_design`,
-    the families in turn, die *i* from ``default_rng([seed, i])``), drops each
+    ``--families`` (default all) in turn, die *i* from ``default_rng([seed, i])``), drops each
     ``--drops`` times in pybullet (physics seed ``seed * 1000 + i``, default
     settings, solid fill) and appends its face counts to
     ``diefab/data/correction-training.jsonl`` (one line per die, written as
@@ -16,6 +16,8 @@ Two steps, each resumable:
 Usage::
 
     nice -n 10 python benchmarks/learn_correction.py --collect --designs 180 --drops 600 --workers 1
+    nice -n 10 python benchmarks/learn_correction.py --collect --seed 1202 --designs 24 --drops 1200 \
+        --families ngem,prism,bipyramid,freeform,convex --workers 1
     python benchmarks/learn_correction.py --fit                # refit the constants, cross-validate, write
     python benchmarks/learn_correction.py --fit --keep-chain   # the same on the packaged constants (quicker)
 """
