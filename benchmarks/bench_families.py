@@ -17,13 +17,16 @@ models with the simulated face frequencies by TVD:
 * ``solid-angle``, the paper's model, the baseline;
 * ``basins``, the quasi-static basins of attraction.
 
-Prints one table per family (every die: faces, smallest margin, TVD of each
-model), a summary (median and worst TVD per family and model, the median
-over every die) and the time per evaluation of each model.  The simulated
-counts are cached in ``benchmarks/results/families.jsonl`` (one line per
-die), so a rerun only simulates what is missing.
+Prints one table per family (every die: faces, smallest margin, the
+sampling-noise floor -- the expected TVD of that many drops sampled from the
+fast model's own prediction -- and the TVD of each model), a summary (median
+and worst TVD per family and model, the median over every die and of the
+family medians), the fast model's measured TVD beside its noise floor, and
+the time per evaluation of each model.  The simulated counts are cached in
+``benchmarks/results/families.jsonl`` (one line per range of drops), so a
+rerun, or a run with more drops, only simulates what is missing.
 
-Run:  nice -n 10 python benchmarks/bench_families.py [--designs 6] [--drops 8000] [--seed 505]
+Run:  nice -n 10 python benchmarks/bench_families.py [--designs 6] [--drops 6000] [--seed 505]
 """
 
 from __future__ import annotations

@@ -18,6 +18,8 @@ Usage::
     nice -n 10 python benchmarks/learn_correction.py --collect --designs 180 --drops 600 --workers 1
     nice -n 10 python benchmarks/learn_correction.py --collect --seed 1202 --designs 24 --drops 1200 \
         --families ngem,prism,bipyramid,freeform,convex --workers 1
+    nice -n 10 python benchmarks/learn_correction.py --collect --seed 1203 --designs 70 --drops 1200 \
+        --families ngem,prism,bipyramid,trapezohedron,cuboid,freeform,convex --workers 1
     python benchmarks/learn_correction.py --fit                # refit the constants, cross-validate, write
     python benchmarks/learn_correction.py --fit --keep-chain   # the same on the packaged constants (quicker)
 """
