@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .design import Design, format_value
+from .families import family
 from .mass import Fill, MassProperties
 from .stats import tvd
 
@@ -136,7 +137,10 @@ def made_balance(
     made_body = MassProperties(1.0, np.asarray(center, dtype=float), np.asarray(inertia, dtype=float))
     made = to_values(design, model_probabilities(MODEL, poly, made_body, fill))
     own = to_values(design, model_probabilities(MODEL, poly, design.mass_properties(), design.fill))
-    command = f"diefab optimize {spec or design.name} --fill {material} --model simulation"
+    if family(design.family).free_names(design.params):
+        command = f"diefab optimize {spec or design.name} --fill {material} --model simulation"
+    else:  # nothing to tune on this shape: design anew for the material
+        command = f"diefab design {design.target} --fill {material}"
     return Balance(
         model=MODEL,
         material=material,

@@ -55,6 +55,7 @@ from .readings import unreadable
 from .stats import pearson_divergence, tvd
 from .symmetric import (
     MAX_FACES,
+    MIN_TIPPING,
     TwoClass,
     face_counts,
     fair_faces,
@@ -168,9 +169,25 @@ def candidates(target: Target, faces: int | None = None, family: str | None = No
     if not found:
         what = f"family {family}" if family else "family"
         raise DesignError(
-            f"no {what}{'' if faces is None else f' with {faces} faces'} fits the {k} values of target {target.spec!r}"
+            f"no {what}{'' if faces is None else f' with {faces} faces'} fits the {k} values of target"
+            f" {target.spec!r}{_why_not(target, faces, family)}"
         )
     return sorted(found, key=lambda c: (not c.exact, c.plan is None, c.faces))
+
+
+def _why_not(target: Target, faces: int | None, family: str | None) -> str:
+    """Why no die with `faces` faces fits `target`, and the face counts that do, as a clause for the error."""
+    if faces is None:
+        return ""
+    why = ""
+    fewest = fair_faces(target, max(MAX_FACES, faces))
+    if fewest is not None and faces % fewest == 0 and faces % 2 == 0 and not fair_shapes(faces):
+        why = f": the fair die with {faces} faces tips by less than {MIN_TIPPING:g}° and would roll on"
+    try:
+        fits = sorted({c.faces for c in candidates(target, None, family)})
+    except DesignError:
+        return why
+    return f"{why}; dice that fit have {', '.join(map(str, fits))} faces"
 
 
 def _fair(target: Target, faces: int | None) -> list[Candidate]:

@@ -34,6 +34,11 @@ STL_VOLUME_REL = 0.005
 #: Paper nets (mm): two flat polygons overlapping by no more than this along
 #: some axis only touch (shared fold edges, tab bases, vertices).
 NET_OVERLAP_MM = 1e-6
+#: A map carrying every vertex within this fraction of the die's radius of a vertex is a symmetry.
+SYMMETRY_REL = 1e-6
+#: Paper nets (mm): a tab layout whose tabs' centre of mass lies this close to the die's
+#: symmetry axis (or plane, or centre) counts as symmetric; among those the smallest wins.
+NET_TAB_OFFSET_MM = 0.01
 
 #: Probabilities summing to 1 within this are a distribution.
 PROBABILITY_SUM = 1e-6

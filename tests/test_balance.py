@@ -17,9 +17,12 @@ def test_a_symmetric_die_stays_balanced_and_a_shifted_centre_warns():
     assert fine.predicted_tvd == pytest.approx(0.0, abs=1e-12) and fine.warning is None
     off = made_balance(d6, d6.polyhedron.centroid + [0.0, 0.0, 0.3], "print", "defaults", "d6")
     assert off.predicted_tvd > off.design_tvd + TVD_SLACK
-    assert "diefab optimize d6 --fill print --model simulation" in off.warning
+    assert "diefab design uniform:6 --fill print" in off.warning  # a cube has nothing to optimize
     assert f"TVD {off.predicted_tvd:.3f}" in off.warning and "fast model" in off.warning
     assert sum(off.predicted.values()) == pytest.approx(1.0)
+    gem = load_design("fudge-gem")
+    tilted = made_balance(gem, gem.polyhedron.centroid + [0.2, 0.0, 0.0], "paper", "160 g/m² card", "fudge-gem")
+    assert "diefab optimize fudge-gem --fill paper --model simulation" in tilted.warning
 
 
 def test_net_of_a_solid_design_warns_once_and_json_carries_the_prediction(run, tmp_path):

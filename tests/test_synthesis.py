@@ -31,6 +31,13 @@ def test_candidates_carry_every_value():
         candidates(parse_target("2d6"), family="sphere")
 
 
+def test_a_face_count_that_fits_nothing_says_why_and_what_fits():
+    with pytest.raises(DesignError, match=r"tips by less than 12° .*have 11, 13, 24 faces") as refused:
+        candidates(parse_target("2d6"), faces=36)
+    fits = [int(n) for n in str(refused.value).rsplit("have ", 1)[1].split(" faces")[0].split(", ")]
+    assert all(candidates(parse_target("2d6"), faces=n) for n in fits)
+
+
 @pytest.mark.parametrize(("spec", "family"), [("1:3,2:3,3:3,4:3,5:3,6:5", "cuboid"), ("uniform:3", "prism")])
 def test_synthesis_under_the_solid_angle_model_hits_the_target(spec, family):
     target = parse_target(spec)

@@ -11,6 +11,16 @@ they would collide.  Among valid layouts the one whose bounding rectangle,
 rotated to fit the page, has the smallest area wins; when no single piece
 fits, the net is split into several pieces that each fit a page.
 
+The card of the tabs is part of the paper die's body (:mod:`diefab.bodies`),
+so on a symmetric die (:mod:`.symmetry`) the tabs are laid out to keep its
+symmetry: trees that the most symmetries map onto themselves are tried
+first, the tabs of each cut edge's orbit under those symmetries go on
+matching sides (edge ``g(e)`` gets its tab on face ``g(f)``) and take the
+orbit's common, narrowest shape, and among the valid layouts those whose
+tabs' centre of mass lies on the die's symmetry axis (within
+:data:`~diefab.tolerances.NET_TAB_OFFSET_MM`) come first.  The distance
+that remains is ``net.search["tab_offset_mm"]``.
+
 All lengths here are millimetres; layout coordinates have y pointing up, and
 the final page coordinates (in :class:`Net`) have y pointing down from the
 page's top-left corner, as SVG and PDF draw them.
@@ -39,6 +49,7 @@ import numpy as np
 from .. import tolerances as tol
 from ..errors import FabricationError
 from ..geometry import Polyhedron
+from .symmetry import Symmetries, off_axis, symmetries
 
 __all__ = ["PAGES", "Net", "Page", "Tab", "pack_copies", "parse_page", "unfold"]
 
@@ -74,6 +85,8 @@ MAX_FINALISTS = 25
 #: (a tree's pieces cost time in proportion to the faces).
 SPLIT_TREES = 12
 SPLIT_FACES = 2400
+#: Widths a tab tries, as fractions of the tab width, before the edge counts as taking none.
+TAB_FACTORS = (1.0, 0.6, 0.35)
 #: Gap between pieces on a page, mm.
 PIECE_GAP = 4.0
 _GRID = np.deg2rad(np.arange(0.0, 180.0, 1.0))
@@ -531,13 +544,15 @@ def _fit(points: np.ndarray, printable: tuple[float, float], margin: float = 0.0
 # tabs
 
 
-def _trapezoid(p, q, width, alpha_p, alpha_q) -> np.ndarray | None:
-    """Tab on edge p->q of a counter-clockwise face (outside = right-hand side), or None if too narrow."""
+def _trapezoid(p, q, width, cp, cq) -> np.ndarray | None:
+    """Tab on edge p->q of a counter-clockwise face (outside = right-hand side), or None if too narrow.
+
+    Its sides lean in by `cp` and `cq` (cotangents of their angles to the edge) at p and q.
+    """
     d = q - p
     length = float(np.hypot(*d))
     u = d / length
     n = np.array([u[1], -u[0]])
-    cp, cq = 1 / math.tan(math.radians(alpha_p)), 1 / math.tan(math.radians(alpha_q))
     w = min(width, TAB_MAX_FRACTION * length, (1 - TAB_TOP_FRACTION) * length / (cp + cq))
     if w < min(TAB_MIN_WIDTH, 0.3 * length) - 1e-12:
         return None
@@ -561,21 +576,139 @@ def _free_angle(point, direction, shapes) -> float:
     return best
 
 
-def _place_tabs(polys, piece_of, cut_copies, width):
+def _place_tabs(polys, piece_of, cut_copies, width, group: Symmetries | None = None):
     """Greedy tabs: for every cut edge the widest shape, on either copy, that overlaps nothing in its piece.
 
     polys : list of (k, 2) arrays (layout coordinates); cut_copies : list of
-    (edge, [(face, p, q), (face, p, q)]).  Returns ``(tabs, None)`` with
-    (edge, face, polygon) per cut edge, or ``(partial, edge)`` naming the
-    first edge that can take no tab.
+    (edge, [(face, p, q, a, b), (face, p, q, a, b)]).  With `group` (symmetries
+    that map the cut edges onto themselves) the edges go orbit by orbit: every
+    edge of an orbit takes its tab on the side a symmetry carries the first
+    edge's side to, all of one width, and then the orbit's common shape (see
+    :func:`_symmetrize`); an orbit that cannot is placed one edge at a time.
+    Returns ``(tabs, None)`` with (edge, face, polygon) per cut edge, or
+    ``(partial, edge)`` naming the first edge that can take no tab.
     """
     if width == 0:
         return [], None
     tabs = _Tabs(polys, piece_of, width)
-    for e, copies in cut_copies:
-        if not tabs.place(e, copies):
-            return tabs.placed, e
+    copies = dict(cut_copies)
+    done: set[int] = set()
+    matched = []
+    for e, _ in cut_copies:
+        if e in done:
+            continue
+        orbit, sides = _orbit_sides(e, copies, group)
+        done.update(orbit)
+        if _place_orbit(tabs, orbit, sides, copies):
+            matched.append(orbit)
+            continue
+        for g in orbit:
+            if not tabs.place(g, copies[g]):
+                return tabs.placed, g
+    if group is not None and len(group) > 1:
+        _symmetrize(tabs.placed, matched, copies, group)
     return tabs.placed, None
+
+
+def _orbit_sides(e: int, copies: dict, group: Symmetries | None) -> tuple[list[int], list[dict[int, int]]]:
+    """The orbit of cut edge `e` (in the order of `copies`) and its consistent tab sides (edge -> face each).
+
+    A side is consistent when no symmetry asks one edge for both of its faces
+    (an edge lying in a mirror plane has none).
+    """
+    if group is None or len(group) == 1:
+        return [e], [{e: c[0]} for c in copies[e]]
+    orbit = set(group.edge[:, e].tolist())
+    sides = []
+    for face, *_ in copies[e]:
+        side: dict[int, int] = {}
+        for g in range(len(group)):
+            e2, f2 = int(group.edge[g, e]), int(group.face[g, face])
+            if side.setdefault(e2, f2) != f2:
+                break
+        else:
+            sides.append(side)
+    return [g for g in copies if g in orbit], sides
+
+
+def _place_orbit(tabs: _Tabs, orbit: list[int], sides: list[dict[int, int]], copies: dict) -> bool:
+    """Tabs on every edge of `orbit` on one of `sides`, all at the widest factor that fits; False if none does."""
+    for factor in TAB_FACTORS:
+        for side in sides:
+            items = [(g, next(c for c in copies[g] if c[0] == side[g])) for g in orbit]
+            if tabs.place_all(items, factor):
+                return True
+    return False
+
+
+def _shape(tab: np.ndarray, p: np.ndarray, q: np.ndarray) -> tuple[float, float, float]:
+    """Width and the two leans (cotangents at p and at q) of a tab on edge p->q."""
+    u = (q - p) / np.hypot(*(q - p))
+    n = np.array([u[1], -u[0]])
+    w = float((tab[3] - p) @ n)
+    return w, float((tab[3] - p) @ u) / w, float((q - tab[2]) @ u) / w
+
+
+def _symmetrize(placed: list, orbits: list[list[int]], copies: dict, group: Symmetries) -> None:
+    """Give the tabs of each orbit one shape (in place): the narrowest width and, at each vertex, the steepest lean.
+
+    The lean at vertex v of the tab on edge x becomes the largest lean at
+    g(v) of the tab on g(x) over the symmetries g, so a symmetry carries
+    every tab onto its image.  The new shape lies inside the old one, so
+    the layout stays free of overlaps.
+    """
+    at = {e: i for i, (e, _, _) in enumerate(placed)}
+    for orbit in orbits:
+        shape, ends = {}, {}
+        for x in orbit:
+            face, tab = placed[at[x]][1:]
+            _, p, q, a, b = next(c for c in copies[x] if c[0] == face)
+            w, cp, cq = _shape(tab, p, q)
+            shape[x], ends[x] = (w, {a: cp, b: cq}), (face, p, q, a, b)
+        width = min(w for w, _ in shape.values())
+        new = {}
+        for x in orbit:
+            lean = dict(shape[x][1])
+            for g in range(len(group)):
+                y = int(group.edge[g, x])
+                for v in lean:
+                    lean[v] = max(lean[v], shape[y][1][int(group.vertex[g, v])])
+            face, p, q, a, b = ends[x]
+            new[x] = (face, _trapezoid(p, q, width, lean[a], lean[b]))
+        if all(t is not None for _, t in new.values()):
+            for x, (face, t) in new.items():
+                placed[at[x]] = (x, face, t)
+
+
+def _tabs_centroid(poly: Polyhedron, mm_per_unit: float, copies: dict, placed: list) -> np.ndarray | None:
+    """Centre of the tabs' card as glued inside the die, model units (each tab on its glued face's plane)."""
+    total, moment = 0.0, np.zeros(3)
+    for e, face, tab in placed:
+        _, p, q, a, b = next(c for c in copies[e] if c[0] == face)
+        u = (q - p) / np.hypot(*(q - p))
+        local = np.column_stack([(tab - p) @ u, (tab - p) @ np.array([u[1], -u[0]])])  # along, outward
+        x, y = local.T
+        x1, y1 = np.roll(x, -1), np.roll(y, -1)
+        cross = x * y1 - x1 * y
+        area = cross.sum() / 2
+        if abs(area) < tol.AREA:
+            continue
+        along, out = ((x + x1) * cross).sum() / (6 * area), ((y + y1) * cross).sum() / (6 * area)
+        glued = int(next(f for f in poly.edge_faces[e] if f != face))
+        start, end = poly.vertices[a], poly.vertices[b]
+        u3 = (end - start) / np.linalg.norm(end - start)
+        inward = np.cross(poly.normals[glued], u3)
+        if inward @ (poly.face_centroids[glued] - start) < 0:
+            inward = -inward
+        moment += abs(area) * (start + (along * u3 + out * inward) / mm_per_unit)
+        total += abs(area)
+    return moment / total if total > 0 else None
+
+
+def _tab_offset(poly, mm_per_unit, copies, placed, group: Symmetries) -> float:
+    """Distance of the tabs' centre from the die's symmetry axis (plane, centre), mm; 0 without tabs."""
+    center = _tabs_centroid(poly, mm_per_unit, copies, placed)
+    return 0.0 if center is None else off_axis(group, center) * mm_per_unit
 
 
 class _Tabs:
@@ -602,30 +735,56 @@ class _Tabs:
     def _near(self, piece: int, points: np.ndarray, pad: float = 0.0) -> list[np.ndarray]:
         return [self.shapes[i] for i in self.grid.near(points, pad) if self.piece_of[self.owner[i]] == piece]
 
+    def _fit(self, face: int, p: np.ndarray, q: np.ndarray, factor: float) -> np.ndarray | None:
+        """The tab `factor` times the width on copy (face, p, q) if it overlaps nothing in its piece, else None."""
+        piece = self.piece_of[face]
+        ends = self._near(piece, np.array([p, q]), pad=1e-6)
+        u = (q - p) / np.hypot(*(q - p))
+        # room at p turning clockwise from p->q, at q turning counter-clockwise from q->p
+        ap = min(math.pi / 4, 0.9 * _free_angle(p, u, ends))
+        aq = min(math.pi / 4, 0.9 * _free_angle_ccw(q, -u, ends))
+        if min(ap, aq) < math.radians(3):
+            return None
+        tab = _trapezoid(p, q, factor * self.width, 1 / math.tan(ap), 1 / math.tan(aq))
+        if tab is None:
+            return None
+        near = self._near(piece, tab)
+        if near and _overlap(_stack(near), tab).any():
+            return None
+        return tab
+
+    def _add(self, e: int, face: int, tab: np.ndarray) -> None:
+        self.grid.add(len(self.shapes), tab)
+        self.shapes.append(tab)
+        self.owner.append(face)
+        self.placed.append((e, face, tab))
+
+    def _undo(self, count: int) -> None:
+        """Take back the last `count` tabs."""
+        for _ in range(count):
+            self.grid.remove(len(self.shapes) - 1, self.shapes.pop())
+            self.owner.pop()
+            self.placed.pop()
+
     def place(self, e: int, copies) -> bool:
-        """Place the widest tab that fits on cut edge `e` (copies: (face, p, q) each); False if none does."""
-        for factor in (1.0, 0.6, 0.35):
-            for face, p, q in copies:
-                piece = self.piece_of[face]
-                ends = self._near(piece, np.array([p, q]), pad=1e-6)
-                u = (q - p) / np.hypot(*(q - p))
-                # room at p turning clockwise from p->q, at q turning counter-clockwise from q->p
-                ap = math.degrees(min(math.pi / 4, 0.9 * _free_angle(p, u, ends)))
-                aq = math.degrees(min(math.pi / 4, 0.9 * _free_angle_ccw(q, -u, ends)))
-                if min(ap, aq) < 3:
-                    continue
-                tab = _trapezoid(p, q, factor * self.width, ap, aq)
-                if tab is None:
-                    continue
-                near = self._near(piece, tab)
-                if near and _overlap(_stack(near), tab).any():
-                    continue
-                self.grid.add(len(self.shapes), tab)
-                self.shapes.append(tab)
-                self.owner.append(face)
-                self.placed.append((e, face, tab))
-                return True
+        """Place the widest tab that fits on cut edge `e` (copies: (face, p, q, ...) each); False if none does."""
+        for factor in TAB_FACTORS:
+            for face, p, q, *_ in copies:
+                tab = self._fit(face, p, q, factor)
+                if tab is not None:
+                    self._add(e, face, tab)
+                    return True
         return False
+
+    def place_all(self, items, factor: float) -> bool:
+        """A tab `factor` times the width on every (edge, (face, p, q, ...)) of `items`, or on none of them."""
+        for k, (e, (face, p, q, *_)) in enumerate(items):
+            tab = self._fit(face, p, q, factor)
+            if tab is None:
+                self._undo(k)
+                return False
+            self._add(e, face, tab)
+        return True
 
 
 class _Grid:
@@ -647,6 +806,11 @@ class _Grid:
     def add(self, key: int, points: np.ndarray) -> None:
         for c in self._span(points, 0.0):
             self.cells.setdefault(c, []).append(key)
+
+    def remove(self, key: int, points: np.ndarray) -> None:
+        """Forget `key`, filed with `points`."""
+        for c in self._span(points, 0.0):
+            self.cells[c].remove(key)
 
     def near(self, points: np.ndarray, pad: float = 0.0) -> list[int]:
         """Keys of the shapes whose cells meet the bounding box of `points` grown by `pad`, increasing."""
@@ -674,14 +838,17 @@ def _free_angle_ccw(point, direction, shapes) -> float:
 
 
 def _cut_copies(poly: Polyhedron, polys: list[np.ndarray], cut: list[int]):
-    """For every cut edge, its two copies (face, start, end) in face-CCW order; longest edges first."""
+    """For every cut edge, its two copies (face, start, end, start vertex, end vertex) in face-CCW order.
+
+    Longest edges first.
+    """
     lookup = _edge_lookup(poly)
     copies: dict[int, list] = {e: [] for e in cut}
     for k, f in enumerate(poly.faces):
         for i, (a, b) in enumerate(_ring(f)):
             e = lookup[_key(a, b)]
             if e in copies:
-                copies[e].append((k, polys[k][i], polys[k][(i + 1) % len(f)]))
+                copies[e].append((k, polys[k][i], polys[k][(i + 1) % len(f)], a, b))
     lengths = {e: float(np.hypot(*(c[0][2] - c[0][1]))) for e, c in copies.items()}
     return sorted(copies.items(), key=lambda item: (-round(lengths[item[0]], 6), item[0]))
 
@@ -698,10 +865,17 @@ class _Layout:
     parent: np.ndarray
     tabs: list
     fits: list[tuple[float, float]]  # (area, angle) per piece
+    offset: float = 0.0  # of the tabs' centre from the symmetry axis, mm
+    kept: int = 1  # symmetries that map the tabs (edge, face) onto themselves
+
+    @property
+    def area(self) -> float:
+        return sum(a for a, _ in self.fits)
 
     @property
     def key(self):
-        return (sum(a for a, _ in self.fits), len(self.fits))
+        """Centred enough first, then the most symmetries kept, then the smallest, then the fewest pieces."""
+        return (max(self.offset, tol.NET_TAB_OFFSET_MM), -self.kept, self.area, len(self.fits))
 
 
 def unfold(
@@ -762,6 +936,9 @@ def unfold(
         count = max(8, min(HEURISTIC_TREES, int(PAIR_BUDGET / m**2)))
         trees, method = _heuristic_trees(poly, count, np.random.default_rng(seed)), "heuristic trees"
 
+    group = symmetries(poly)
+    keeps = _tree_symmetries(group, trees)  # (T, g): which symmetries map each tree onto itself
+    n_sym = keeps.sum(axis=1)
     world, roots = _place(trees, poly, hinges, padded)
     n_clash = _count_overlaps(world, [len(f) for f in poly.faces])
     est = np.empty(len(trees))
@@ -773,49 +950,90 @@ def unfold(
         # the faces alone must fit, allowing for the coarse grid
         fits_page[start : start + 512] = ((w <= printable[0] * 1.03) & (h <= printable[1] * 1.03)).any(axis=1)
 
-    stats = {"method": method, "trees": len(trees), "spanning_trees": count, "overlap_free": int((n_clash == 0).sum())}
+    stats = {"method": method, "trees": len(trees), "spanning_trees": count, "overlap_free": int((n_clash == 0).sum()),
+             "symmetries": len(group)}  # fmt: skip
     best: _Layout | None = None
-    tried = 0
-    order = np.lexsort((est, n_clash > 0))
+    tried: dict[int, int] = {}  # finalists per number of symmetries kept
+    # the trees that keep the most symmetries first, each group smallest first
+    order = np.lexsort((est, -n_sym, n_clash > 0))
     for t in order:
-        if n_clash[t] or not fits_page[t] or tried >= MAX_FINALISTS:
+        if n_clash[t] or not fits_page[t] or tried.get(n_sym[t], 0) >= MAX_FINALISTS:
             continue
-        if best is not None and est[t] * (1 - 0.03) > best.key[0]:
-            break
-        tried += 1
-        layout = _single_piece(poly, trees[t], world[t], roots[t], tab_width, printable)
+        if best is not None and est[t] * (1 - 0.03) > best.area and best.offset <= tol.NET_TAB_OFFSET_MM:
+            continue
+        tried[n_sym[t]] = tried.get(n_sym[t], 0) + 1
+        layout = _single_piece(
+            poly, trees[t], world[t], roots[t], tab_width, printable, group, group.subgroup(keeps[t]), mm_per_unit
+        )
         if layout is not None and (best is None or layout.key < best.key):
             best = layout
             if not search:
                 break
-    stats["finalists"] = tried
+    stats["finalists"] = sum(tried.values())
     if best is None:
         # split: grow pieces along the trees with the smallest footprint, keep the fewest pieces
         n_split = max(1, min(SPLIT_TREES, int(SPLIT_FACES / m))) if search else 1
         for t in np.argsort(n_clash * 1e12 + est, kind="stable")[:n_split]:
             layout = _split(poly, trees[t], world[t], roots[t], tab_width, printable)
-            if layout is not None and (
-                best is None or (len(layout.fits), layout.key[0]) < (len(best.fits), best.key[0])
-            ):
+            if layout is not None and (best is None or (len(layout.fits), layout.area) < (len(best.fits), best.area)):
                 best = layout
+        if best is not None:
+            copies = dict(_cut_copies(poly, best.polys, list(range(len(poly.edges)))))
+            best.offset = _tab_offset(poly, mm_per_unit, copies, best.tabs, group)
+            best.kept = _kept(group, best.tabs)
     if best is None:
         raise FabricationError("cannot place glue tabs on this net; try a smaller --tab-width")
     stats["pieces"] = len(best.fits)
+    stats["tab_offset_mm"] = best.offset
+    stats["tab_symmetries"] = best.kept if len(group) > 1 else 1
     return _finish(poly, mm_per_unit, page, best, stats)
 
 
-def _single_piece(poly, tree, world_t, rooting, tab_width, printable) -> _Layout | None:
+def _kept(group: Symmetries, tabs: list) -> int:
+    """How many symmetries map the tabs (which edge, on which face) onto themselves."""
+    own = {(e, f) for e, f, _ in tabs}
+    return sum({(int(ge[e]), int(gf[f])) for e, f in own} == own for ge, gf in zip(group.edge, group.face))
+
+
+def _tree_symmetries(group: Symmetries, trees: list[tuple[int, ...]]) -> np.ndarray:
+    """(T, g) bool: symmetry g maps tree t's edges onto themselves (then it maps the cut edges so too)."""
+    if len(group) == 1 or not trees:
+        return np.ones((len(trees), len(group)), dtype=bool)
+    edges = np.array(trees)
+    own = np.sort(edges, axis=1)
+    return np.stack([(np.sort(perm[edges], axis=1) == own).all(axis=1) for perm in group.edge], axis=1)
+
+
+def _single_piece(poly, tree, world_t, rooting, tab_width, printable, group, kept, mm_per_unit) -> _Layout | None:
+    """The layout of `tree` as one piece with its tabs, or None if it does not fit.
+
+    The tabs keep the symmetries `kept` (those that map the tree onto
+    itself) where they can; when they cannot keep them all (a mirror plane
+    that cuts across a cut edge leaves that edge no symmetric side), the
+    rotations among them are tried too, and the better layout is kept.
+    """
     m = len(poly.faces)
     polys = [world_t[k, : len(poly.faces[k])] for k in range(m)]
     piece_of = np.zeros(m, dtype=np.intp)
     cut = sorted(set(range(len(poly.edges))) - set(tree))
-    tabs, failed = _place_tabs(polys, piece_of, _cut_copies(poly, polys, cut), tab_width)
-    if failed is not None:
-        return None
-    fit = _fit(np.concatenate(polys + [t for _, _, t in tabs]), printable)
-    if fit is None:
-        return None
-    return _Layout(tree, polys, piece_of, rooting[0], tabs, [fit])
+    copies = _cut_copies(poly, polys, cut)
+    best = None
+    rotations = np.linalg.det(kept.matrices) > 0
+    for sub in (kept, kept.subgroup(rotations)):
+        tabs, failed = _place_tabs(polys, piece_of, copies, tab_width, sub)
+        fit = None if failed is not None else _fit(np.concatenate(polys + [t for _, _, t in tabs]), printable)
+        if fit is None:
+            layout = None
+        elif len(group) == 1:
+            return _Layout(tree, polys, piece_of, rooting[0], tabs, [fit])
+        else:
+            offset = _tab_offset(poly, mm_per_unit, dict(copies), tabs, group)
+            layout = _Layout(tree, polys, piece_of, rooting[0], tabs, [fit], offset, _kept(group, tabs))
+        if layout is not None and (best is None or layout.key < best.key):
+            best = layout
+        if (best is not None and best.kept >= len(kept)) or rotations.all():
+            break
+    return best
 
 
 def _split(poly, tree, world_t, rooting, tab_width, printable) -> _Layout | None:
