@@ -106,7 +106,7 @@ PARAMETERS: dict[str, Parameter] = {
     )
 }
 #: Fitted unless ``free`` says otherwise.
-DEFAULT_FREE = ("restitution", "friction", "spin", "drop_height")
+DEFAULT_FREE = ("restitution", "friction", "rolling_friction", "spin", "drop_height")
 
 
 # ----------------------------------------------------------------------
