@@ -1,6 +1,6 @@
 """Leave-one-die-out prediction of real dice: default physics, calibrated physics, models, the source's own.
 
-    nice -n 10 python benchmarks/bench_calibrate.py --workers 1    # the full run (about an hour on 2 busy shared cores)
+    nice -n 10 python benchmarks/bench_calibrate.py --workers 1    # the full run (about 30 minutes, 2 busy cores)
     python benchmarks/bench_calibrate.py --drops 200 --candidates 3 --slow-drops 60 --predict-drops 200  # a quick one
 
 The dice: the paper's die as made (the gem a=1.18 b=0.52 c=0.72 d=1.41 as
