@@ -13,8 +13,10 @@ over the resting faces (transitional faces stay at 0).  The features
 (:func:`face_features`) are things every convex polyhedron has: the chain's
 and the toppled solid angle's share, the stability margin, the lowest
 tipping barrier, the rest height, the face's area and its inertia about its
-normal, its neighbours' chain shares, and the die's face count, anisotropy
-and size as interactions with the chain's share.  All are computed from the
+normal, its neighbours' chain shares, how far the centre of mass stands off
+the face's centroid, the face's share of first contacts at corners
+(:func:`corner_shares`), and the die's face count, anisotropy and size as
+interactions with the chain's share.  All are computed from the
 geometry and the centre of mass alone, so faces that a symmetry of the die
 maps onto each other get equal features and equal probabilities (a Platonic
 solid stays uniform), and the model is deterministic.
@@ -50,7 +52,15 @@ import numpy as np
 from .errors import DesignError
 from .geometry import Polyhedron, face_margins, resting_faces, solid_angles
 
-__all__ = ["CORRECTION_FILE", "FEATURES", "Correction", "corrected", "face_features", "packaged_correction"]
+__all__ = [
+    "CORRECTION_FILE",
+    "FEATURES",
+    "Correction",
+    "corner_shares",
+    "corrected",
+    "face_features",
+    "packaged_correction",
+]
 
 #: The fitted correction, in the package (written by ``benchmarks/learn_correction.py --fit``).
 CORRECTION_FILE = "correction.json"
@@ -69,6 +79,8 @@ FEATURES = (
     "log_chain_x_faces",  # log_chain times log(resting faces)
     "log_chain_x_anisotropy",  # log_chain times log(largest / smallest principal moment)
     "log_chain_x_size",  # log_chain times L (the cube root of the volume, model units)
+    "offcenter",  # distance from the face's centroid to the foot of the centre of mass / sqrt(area)
+    "log_corner",  # log of the face's share of first contacts at its corners (corner_shares)
 )
 #: Floor of a probability under a logarithm.
 _FLOOR = 1e-4
@@ -121,6 +133,8 @@ def face_features(
     edges = np.diff(np.append(start, len(face))).astype(float)
     neighbors = np.bincount(face, weights=log_chain[across], minlength=m) / edges
     spin = np.einsum("ij,jk,ik->i", poly.normals, inertia, poly.normals) / moments.mean() - 1
+    foot = center + height[:, None] * poly.normals
+    offcenter = np.linalg.norm(poly.face_centroids - foot, axis=1) / np.sqrt(poly.areas)
     r = resting
     out = np.column_stack(
         [
@@ -136,10 +150,35 @@ def face_features(
             log_chain * np.log(r.sum()),
             log_chain * np.log(moments[-1] / moments[0]),
             log_chain * size,
+            offcenter,
+            np.log(np.clip(corner_shares(poly), _FLOOR, None)),
         ]
     )
     out[~r] = 0.0
     return out, resting
+
+
+def corner_shares(poly: Polyhedron) -> np.ndarray:
+    """(m,) float: each face's share of the first contacts at corners, for a uniformly random orientation.
+
+    A convex body dropped in a uniformly random orientation first touches
+    the floor with its lowest vertex, and vertex *v* is the lowest for a
+    solid angle of down directions equal to its angle defect (``2 pi`` minus
+    the face angles at *v*; they sum to ``4 pi``).  Each vertex's share is
+    split among its faces in proportion to their angles at it.  The shares
+    sum to 1 and depend on the shape alone.
+    """
+    tail, head, face, start = poly._ring
+    nxt = np.arange(len(face)) + 1
+    ends = np.append(start[1:], len(face))
+    nxt[ends - 1] = start  # the edge after a face's last one is its first
+    a = poly.vertices[tail] - poly.vertices[head]
+    b = poly.vertices[head[nxt]] - poly.vertices[head]
+    cos = np.einsum("ij,ij->i", a, b) / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1))
+    angle = np.arccos(np.clip(cos, -1, 1))  # the face's angle at `head`
+    total = np.bincount(head, weights=angle, minlength=len(poly.vertices))
+    defect = 2 * np.pi - total
+    return np.bincount(face, weights=defect[head] * angle / total[head], minlength=len(poly.faces)) / (4 * np.pi)
 
 
 #: The base features the ``"small"`` expansion keeps (the first six: shares, margin, barrier, height, area).

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from diefab.correction import FEATURES, Correction, corrected, face_features, packaged_correction
+from diefab.correction import FEATURES, Correction, corner_shares, corrected, face_features, packaged_correction
 from diefab.design import load_design
 from diefab.families.sampling import RANDOM_FAMILIES, design_record, random_design, record_design
 from diefab.fastmodel import fast_model, landing_probabilities
@@ -130,3 +130,33 @@ def test_random_dice_rest_on_every_face_and_are_reproducible(dice):
     assert [design_record(a) for a in again] == [design_record(b) for b in dice[:3]]
     with pytest.raises(ValueError, match="no random dice of family"):
         random_design("mesh", np.random.default_rng(0))
+
+
+def test_corner_shares_are_a_distribution_invariant_under_motion_and_scale(dice):
+    from scipy.spatial.transform import Rotation
+
+    from diefab.geometry import Polyhedron
+
+    for d in dice[:8]:
+        poly = d.polyhedron
+        s = corner_shares(poly)
+        assert np.all(s >= 0) and s.sum() == pytest.approx(1, abs=1e-12)
+        moved = Rotation.from_rotvec([0.3, -1.1, 0.7]).apply(np.array(poly.vertices)) * 2.5 + [1.0, -2.0, 0.5]
+        assert np.allclose(corner_shares(Polyhedron(moved, poly.faces)), s, atol=1e-12)
+
+
+def test_corner_shares_of_a_box_are_uniform_whatever_its_proportions():
+    # every corner of a box has defect pi/2 and three right angles: each face collects 4 * (pi/2) / 3 of 4 pi
+    from diefab.geometry import Polyhedron
+
+    box = Polyhedron.from_points(np.array([[x, y, z] for x in (0, 3) for y in (0, 1) for z in (0, 0.4)], float))
+    assert np.allclose(corner_shares(box), 1 / 6, atol=1e-12)
+
+
+def test_features_of_mirror_image_faces_are_equal():
+    # a bipyramid's rotations map the faces of each half onto each other: every feature row agrees
+    d = random_design("bipyramid", np.random.default_rng(2), {"n": 6})
+    x, resting = face_features(d.polyhedron, d.mass_properties().center)
+    up = d.polyhedron.normals[:, 1] > 0
+    assert resting.all()
+    assert np.ptp(x[up], axis=0).max() < 1e-9 and np.ptp(x[~up], axis=0).max() < 1e-9

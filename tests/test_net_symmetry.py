@@ -79,7 +79,8 @@ def test_gem_tabs_are_symmetric_and_centred_on_the_axis(name):
     tabs = {(t.edge, t.face) for t in net.tabs}
     kept = [g for g in range(len(group)) if {(int(group.edge[g, e]), int(group.face[g, f])) for e, f in tabs} == tabs]
     assert len(kept) == net.search["tab_symmetries"] == 4
-    assert all(np.isclose(np.linalg.det(group.matrices[g]), 1.0) for g in kept) or len(group) == 4
+    if len(group) == 8:
+        assert all(np.isclose(np.linalg.det(group.matrices[g]), 1.0) for g in kept)
     # ... and the tab card, as the paper body glues it, onto itself: same areas, centre on the axis
     areas, centers = tab_card(design, net)
     center = card_center(areas, centers)
@@ -110,8 +111,8 @@ def test_symmetric_tabs_overlap_nothing(name):
     assert len(net.tabs) == len(net.poly.edges) - len(net.fold_edges)
 
 
-def test_platonic_tabs_closer_to_the_centre_than_any_tree_alone_gives():
-    """On a cube the tab centre cannot reach the centre, but the search keeps it within a millimetre."""
+def test_cube_tab_centre_is_stated_and_within_a_millimetre():
+    """No cube net has a tab set symmetric under the cube's group; the search keeps its centre within 1 mm."""
     d6 = load_design("d6")
     net = unfold(d6.polyhedron, d6.mm_per_unit)
     center = card_center(*tab_card(d6, net))

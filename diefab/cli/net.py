@@ -73,15 +73,19 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
     n_pages = max(n.n_pages for n in pack_copies(the_net, copies))
     if as_json:
         emit_json({"files": [str(p) for p in written], "size_mm": size, "pieces": the_net.n_pieces,
-                   "pages": n_pages, "tabs": len(the_net.tabs), **balance.as_json()})  # fmt: skip
+                   "pages": n_pages, "tabs": len(the_net.tabs),
+                   "tab_offset_mm": the_net.search.get("tab_offset_mm", 0.0), **balance.as_json()})  # fmt: skip
         return
     for path in written:
         click.echo(str(path))
     pieces = f"{the_net.n_pieces} piece{'s' * (the_net.n_pieces > 1)}{' each' * (copies > 1)}"
     tabs = f"{len(the_net.tabs)} glue tabs" if the_net.tabs else "no glue tabs"
+    about = the_net.search.get("symmetric_about", "space")
+    if the_net.tabs and about != "space":  # a symmetric die: how far the tabs' card sits off its symmetry
+        tabs += f" (their centre {the_net.search['tab_offset_mm']:.2f} mm off the die's symmetry {about})"
     dice = f"{copies} dice, " if copies > 1 else ""
     click.echo(
-        f"{d.name}: {size:g} mm die ({d.size_note}), {dice}{pieces} each, {tabs}, on {n_pages} "
+        f"{d.name}: {size:g} mm die ({d.size_note}), {dice}{pieces}, {tabs}, on {n_pages} "
         f"{sheet.name} page{'s' * (n_pages > 1)}\nto read it: {reading_note(d)}"
     )
     click.echo(balance.summary())

@@ -20,6 +20,8 @@ Examples
 >>> box = Polyhedron.from_points([[x, y, z] for x in (0, 3) for y in (0, 2) for z in (0, 1)])
 >>> len(symmetries(box)), float(off_axis(symmetries(box), box.vertices.mean(axis=0) + [0.5, 0, 0]))
 (8, 0.5)
+>>> symmetries(cube).fixed_set, symmetries(box).fixed_set
+('centre', 'centre')
 """
 
 from __future__ import annotations
@@ -62,6 +64,12 @@ class Symmetries:
     def projector(self) -> np.ndarray:
         """(3, 3) orthogonal projection onto the fixed set (the mean of the group's matrices)."""
         return self.matrices.mean(axis=0)
+
+    @property
+    def fixed_set(self) -> str:
+        """What the group fixes: ``"centre"``, ``"axis"``, ``"plane"`` or ``"space"`` (no symmetry)."""
+        rank = int(round(float(np.trace(self.projector))))
+        return ("centre", "axis", "plane", "space")[rank]
 
     def subgroup(self, keep: np.ndarray) -> Symmetries:
         """The symmetries selected by the boolean mask or index array `keep` (a subgroup if the caller says so)."""

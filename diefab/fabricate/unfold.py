@@ -79,7 +79,8 @@ HEURISTIC_TREES = 400
 #: Face pairs checked for overlap over all heuristic trees: a die with many faces tries fewer trees.
 PAIR_BUDGET = 4e7
 #: Finalists (the layouts with the smallest faces-only footprint) whose tabs are
-#: built and whose exact bounding rectangle is measured.
+#: built and whose exact bounding rectangle is measured: this many per number of
+#: the die's symmetries a tree keeps, twice this many in all.
 MAX_FINALISTS = 25
 #: Trees grown into pieces when no single piece fits, and the face count over which fewer are tried
 #: (a tree's pieces cost time in proportion to the faces).
@@ -957,6 +958,8 @@ def unfold(
     # the trees that keep the most symmetries first, each group smallest first
     order = np.lexsort((est, -n_sym, n_clash > 0))
     for t in order:
+        if sum(tried.values()) >= 2 * MAX_FINALISTS:
+            break
         if n_clash[t] or not fits_page[t] or tried.get(n_sym[t], 0) >= MAX_FINALISTS:
             continue
         if best is not None and est[t] * (1 - 0.03) > best.area and best.offset <= tol.NET_TAB_OFFSET_MM:
@@ -986,6 +989,7 @@ def unfold(
     stats["pieces"] = len(best.fits)
     stats["tab_offset_mm"] = best.offset
     stats["tab_symmetries"] = best.kept if len(group) > 1 else 1
+    stats["symmetric_about"] = group.fixed_set
     return _finish(poly, mm_per_unit, page, best, stats)
 
 
