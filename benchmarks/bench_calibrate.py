@@ -1,6 +1,6 @@
 """Leave-one-die-out prediction of real dice: default physics, calibrated physics, models, the source's own.
 
-    nice -n 10 python benchmarks/bench_calibrate.py --workers 1    # the full run (about 20 minutes, 2 shared cores)
+    nice -n 10 python benchmarks/bench_calibrate.py --workers 1    # the full run (about 30 minutes, 2 busy cores)
     python benchmarks/bench_calibrate.py --drops 200 --candidates 3 --slow-drops 60 --predict-drops 200  # a quick one
 
 The dice: the paper's die as made (the gem a=1.18 b=0.52 c=0.72 d=1.41 as
@@ -13,12 +13,12 @@ inertia).
 Calibration, affordable on a shared 2-core machine:
 
 1. Every die is dropped at the same candidate settings: the defaults and
-   ``--candidates`` scrambled Sobol points in the box of restitution,
-   friction, spin and drop height that ``diefab calibrate`` searches, with
+   ``--candidates`` scrambled Sobol points in the box of the settings
+   ``--free`` names (default restitution, friction, rolling friction, spin
+   and drop height, over the ranges ``diefab calibrate`` searches), with
    common random numbers (one seed; ``--drops`` drops per die and candidate,
    ``--slow-drops`` for dice of more than 50 hull faces, whose drops cost
-   several times more).  Dice with the same design (binom3 on wood and on
-   stone) share their simulations.
+   several times more).
 2. Per die, a response surface (:func:`diefab.calibrate.fit_surface`, a
    multinomial logistic regression quadratic in the settings) pools all
    candidates' counts into smooth value probabilities over the whole box.
@@ -26,20 +26,24 @@ Calibration, affordable on a shared 2-core machine:
    the *other* dice's real counts under their surfaces plus a normal prior
    toward the default physics (``--prior`` standard deviations, in units of
    each parameter's range; fixed before any result was seen)
-   (:func:`diefab.calibrate.fit_settings`).
+   (:func:`diefab.calibrate.fit_settings`).  Pooled, the fit uses every
+   other die; *by material* only the other dice of the held-out die's
+   material (:data:`MATERIAL`: what it is made of and what it was rolled
+   on), and a die whose material no other die shares gets the defaults:
+   a calibration carries over to a die of the same material, not across.
 4. The held-out die is then dropped afresh at its calibrated setting
    (``--predict-drops`` drops, seed ``--predict-seed``, never used in
    fitting), and so is every die at the default physics.
 
 Printed per die, as TVD to the real frequencies (mirror-image outcomes
 compared up to relabelling): default physics; leave-one-out calibrated
-physics (fresh drops; and its surface's value); the same without the prior
-and the best single candidate (surface values, for comparison); the
-in-sample fit (all dice, the optimistic bound); the solid-angle, fast and
-basins models; the source's own quasi-static model (``ours``) and Bullet
-and IPC simulations; and the TVD sampling noise alone gives at the die's
-number of rolls (Monte-Carlo at the observed frequencies).  Then which
-parameters the fit leans on.
+physics, pooled and by material (fresh drops), the pooled fit's surface
+value; the same without the prior and the best single candidate (surface
+values, for comparison); the in-sample fit (all dice, the optimistic
+bound); the solid-angle, fast and basins models; the source's own
+quasi-static model (``ours``) and Bullet and IPC simulations; and the TVD
+sampling noise alone gives at the die's number of rolls (Monte-Carlo at
+the observed frequencies).  Then which parameters the fit leans on.
 
 Simulated counts are cached in ``--cache`` (one JSON line per design,
 setting, drop count and seed), so an interrupted run continues where it
@@ -74,7 +78,10 @@ from diefab.realrolls import grouped_tvd as grouped
 
 HERE = Path(__file__).parent
 TABLE_2 = np.array([0, 20, 48, 80, 89, 83, 66, 17, 2])  # the paper's real rolls, values -4..4
-FREE = ("restitution", "friction", "spin", "drop_height")
+FREE = ("restitution", "friction", "rolling_friction", "spin", "drop_height")
+#: What each die is made of and what it was rolled on: a calibration carries over only within one material.
+MATERIAL = {"paper-gem": "paper model on the paper's table", "binom3_stone": "printed, on stone"}
+PRINTED = "printed, on the source's table"
 SLOW_FACES = 50  # dice with more hull faces than this drop --slow-drops times per candidate
 PAPER_DIE = """
 name = "paper-gem"
@@ -163,12 +170,13 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--drops", type=int, default=300, help="drops per die and candidate")
     parser.add_argument("--slow-drops", type=int, default=60, help=f"the same, dice of more than {SLOW_FACES} faces")
-    parser.add_argument("--candidates", type=int, default=16, help="Sobol candidates besides the defaults")
+    parser.add_argument("--candidates", type=int, default=24, help="Sobol candidates besides the defaults")
     parser.add_argument("--prior", type=float, default=0.25,
                         help="prior sd toward the defaults, in parameter ranges (inf: none)")  # fmt: skip
     parser.add_argument("--predict-drops", type=int, default=2000, help="fresh drops of each prediction")
     parser.add_argument("--seed", type=int, default=0, help="physics seed of the candidates (common random numbers)")
     parser.add_argument("--predict-seed", type=int, default=1, help="physics seed of the predictions")
+    parser.add_argument("--free", default=",".join(FREE), help="the settings fitted (comma-separated)")
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--realrolls", type=Path, default=Path("/work/shared/realrolls"))
     parser.add_argument("--cache", type=Path, default=HERE / "results" / "calibrate_loo_cache.jsonl")
@@ -177,15 +185,17 @@ def main() -> int:
     from scipy.stats import qmc
 
     dice = load_dice(args.realrolls)
-    spec = make_spec(dice, free=FREE)
+    free = tuple(n.strip() for n in args.free.split(",") if n.strip())
+    spec = make_spec(dice, free=free)
+    materials = [MATERIAL.get(d.name, PRINTED) for d in dice]
     x0 = np.array(spec.x0)
     m = max(int(np.ceil(np.log2(max(args.candidates, 1)))), 0)  # whole powers of 2 keep Sobol's balance
-    points = qmc.Sobol(len(FREE), scramble=True, seed=args.seed).random_base2(m)[: args.candidates]
+    points = qmc.Sobol(len(free), scramble=True, seed=args.seed).random_base2(m)[: args.candidates]
     xs = np.vstack([x0, points])
     faces = [len(d.design.polyhedron.names) for d in dice]
     drops = [args.slow_drops if f > SLOW_FACES else args.drops for f in faces]
     print(f"{len(dice)} dice, {len(xs)} candidates (defaults + {args.candidates} Sobol points in "
-          f"{', '.join(f'{n} [{lo:g}, {hi:g}]' for n, (lo, hi) in zip(FREE, spec.bounds))}); "
+          f"{', '.join(f'{n} [{lo:g}, {hi:g}]' for n, (lo, hi) in zip(free, spec.bounds))}); "
           f"{args.drops} drops per die and candidate ({args.slow_drops} for dice of more than {SLOW_FACES} faces), "
           f"seed {args.seed}; predictions {args.predict_drops} drops, seed {args.predict_seed}; prior sd "
           f"{args.prior:g} of each range; {args.workers} workers", flush=True)  # fmt: skip
@@ -226,7 +236,9 @@ def main() -> int:
     for i, die in enumerate(dice):
         train = [j for j in everyone if j != i]
         x_loo = calibrate(train, args.prior)
-        x_free = calibrate(train, np.inf)
+        x_noprior = calibrate(train, np.inf)
+        same = [j for j in train if materials[j] == materials[i]]
+        x_mat = calibrate(same, args.prior) if same else x0  # no die of its material: nothing to carry over
         pick = int(np.argmin(dev[train].sum(axis=0)))
         fitted.append(x_loo)
 
@@ -240,8 +252,9 @@ def main() -> int:
             "noise": noise_tvd(die),
             "default": grouped_tvd(die, fresh(x0)),
             "loo": grouped_tvd(die, fresh(x_loo)),
+            "material": grouped_tvd(die, fresh(x_mat)),
             "loo-surface": surface_tvd(i, x_loo),
-            "no-prior": surface_tvd(i, x_free),
+            "no-prior": surface_tvd(i, x_noprior),
             "candidate": grouped_tvd(die, die.symmetrized(counts[i][pick] / counts[i][pick].sum())),
             "in-sample": surface_tvd(i, x_all),
         }
@@ -250,37 +263,46 @@ def main() -> int:
             row[model] = None if p is None else grouped_tvd(die, p)
         for ref in ("ours", "bullet", "ipc"):
             row[ref] = grouped_tvd(die, die.reference[ref]) if ref in die.reference else None
-        row["settings"] = dict(zip(FREE, spec.values(x_loo).round(4).tolist()))
+        row["settings"] = dict(zip(free, spec.values(x_loo).round(4).tolist()))
+        row["material_settings"] = dict(zip(free, spec.values(x_mat).round(4).tolist()))
+        row["material_dice"] = [dice[j].name for j in same]
         rows.append(row)
         print(f"  held out {die.name}: " + " ".join(f"{n}={v:.3g}" for n, v in row["settings"].items())
+              + f"; by material ({materials[i]}, {len(same)} dice): "
+              + (" ".join(f"{n}={v:.3g}" for n, v in row["material_settings"].items()) if same else "the defaults")
               + f"  ({time.perf_counter() - started:.0f} s)", flush=True)  # fmt: skip
     shutdown_pool()
     seconds = time.perf_counter() - started
 
-    cols = ["noise", "default", "loo", "loo-surface", "no-prior", "candidate", "in-sample", "solid-angle", "fast",
-            "basins", "ours", "bullet", "ipc"]  # fmt: skip
+    cols = ["noise", "default", "loo", "material", "loo-surface", "no-prior", "candidate", "in-sample", "solid-angle",
+            "fast", "basins", "ours", "bullet", "ipc"]  # fmt: skip
     print(f"\nTVD to the real frequencies ({sims.dropped:,} drops simulated in {sims.seconds:.0f} s of simulation, "
           f"{seconds:.0f} s in all, on a shared machine)")  # fmt: skip
-    print(f"{'die':<14}{'rolls':>6}" + "".join(f"{c:>12}" for c in cols))
+    print(f"{'die':<22}{'rolls':>6}" + "".join(f"{c:>12}" for c in cols))
     for row in rows:
         cells = "".join(f"{'-':>12}" if row[c] is None else f"{row[c]:12.4f}" for c in cols)
-        print(f"{row['die']:<14}{row['rolls']:>6}{cells}")
+        print(f"{row['die']:<22}{row['rolls']:>6}{cells}")
 
     def mean(c: str, which) -> float | None:
         vals = [r[c] for r in which if r[c] is not None]
         return float(np.mean(vals)) if vals else None
 
-    groups = {"mean, all dice": rows, "mean, the real-rolls dice": [r for r in rows if r["ours"] is not None]}
+    groups = {
+        "mean, all dice": rows,
+        "mean, the real-rolls dice": [r for r in rows if r["ours"] is not None],
+        "mean, real-rolls w/o kitten": [r for r in rows if r["ours"] is not None and r["die"] != "kitten_d3"],
+    }
     means = {}
     for label, which in groups.items():
         means[label] = {c: mean(c, which) for c in cols}
-        print(f"{label:<20}" + "".join(f"{'-':>12}" if v is None else f"{v:12.4f}" for v in means[label].values()))
-    wins = {ref: sum(r["loo"] < r[ref] for r in rows if r[ref] is not None) for ref in ("default", "ours", "bullet")}
-    print(
-        f"\nleave-one-out calibrated beats: default physics on {wins['default']} of {len(rows)} dice, `ours` on "
-        f"{wins['ours']} of {len(groups['mean, the real-rolls dice'])}, `bullet` on {wins['bullet']}; "
-        f"within 1.5x sampling noise on {sum(r['loo'] <= 1.5 * r['noise'] for r in rows)} of {len(rows)}"
-    )
+        print(f"{label:<28}" + "".join(f"{'-':>12}" if v is None else f"{v:12.4f}" for v in means[label].values()))
+    for col in ("loo", "material"):
+        wins = {ref: sum(r[col] < r[ref] for r in rows if r[ref] is not None) for ref in ("default", "ours", "bullet")}
+        print(
+            f"\n{col}: beats default physics on {wins['default']} of {len(rows)} dice, `ours` on "
+            f"{wins['ours']} of {len(groups['mean, the real-rolls dice'])}, `bullet` on {wins['bullet']}; "
+            f"within 1.5x sampling noise on {sum(r[col] <= 1.5 * r['noise'] for r in rows)} of {len(rows)}"
+        )
 
     print("\nresponse surfaces: mean TVD to their own candidates' frequencies (the simulation noise of one candidate)")
     for name, gap, expected in fit_rows:
@@ -291,20 +313,20 @@ def main() -> int:
     base = total(x_all)
     print(
         f"\nin-sample fit over all {len(dice)} dice: "
-        + " ".join(f"{n}={v:.3g}" for n, v in zip(FREE, spec.values(x_all)))
+        + " ".join(f"{n}={v:.3g}" for n, v in zip(free, spec.values(x_all)))
         + f"; total deviance {base:.1f} (defaults {total(x0):.1f}), prior {prior_penalty(x_all, x0, args.prior):.1f}"
     )
     print("rise of the total deviance as one setting sweeps its range (others at the in-sample fit):")
     leans = {}
-    for k, name in enumerate(FREE):
+    for k, name in enumerate(free):
         grid = np.linspace(0, 1, 21)
-        vals = [total(np.where(np.arange(len(FREE)) == k, g, x_all)) for g in grid]
+        vals = [total(np.where(np.arange(len(free)) == k, g, x_all)) for g in grid]
         leans[name] = float(max(vals) - base)
         lo, hi = spec.bounds[k]
         print(f"  {name:<12} up to +{leans[name]:.1f} (least at {lo + grid[int(np.argmin(vals))] * (hi - lo):.3g})")
     if args.json is not None:
         summary = {"args": {k: str(v) for k, v in vars(args).items()}, "rows": rows, "means": means,
-                   "in_sample": dict(zip(FREE, spec.values(x_all).tolist())), "leans": leans, "seconds": seconds,
+                   "in_sample": dict(zip(free, spec.values(x_all).tolist())), "leans": leans, "seconds": seconds,
                    "drops": sims.dropped}  # fmt: skip
         args.json.write_text(json.dumps(summary, indent=2))
     return 0

@@ -98,7 +98,7 @@ PARAMETERS: dict[str, Parameter] = {
     for p in (
         Parameter("restitution", "restitution", 0.0, 0.9, "", "restitution of die and ground"),
         Parameter("friction", "friction", 0.1, 1.5, "", "Coulomb friction of die and ground"),
-        Parameter("rolling_friction", "rolling_friction", 0.0, 0.02, "", "Bullet's rolling friction"),
+        Parameter("rolling_friction", "rolling_friction", 0.0, 0.06, "units", "Bullet's rolling friction"),
         Parameter("spinning_friction", "spinning_friction", 0.0, 0.02, "", "Bullet's spinning friction"),
         Parameter("spin", "angular_velocity", 0.0, 40.0, "rad/s", "upper end of the initial spin range"),
         Parameter("speed", "linear_velocity", 0.0, 5.0, "units/s", "upper end of the initial horizontal speed"),
@@ -106,7 +106,7 @@ PARAMETERS: dict[str, Parameter] = {
     )
 }
 #: Fitted unless ``free`` says otherwise.
-DEFAULT_FREE = ("restitution", "friction", "spin", "drop_height")
+DEFAULT_FREE = ("restitution", "friction", "rolling_friction", "spin", "drop_height")
 
 
 # ----------------------------------------------------------------------

@@ -280,6 +280,21 @@ def test_robust_objective_is_the_worst_throw_and_resumes(tmp_path):
     assert RunSpec.from_json(spec.to_json()) == spec
     record = SimulationObjective(spec, workers=1)(np.array(spec.x0), 20)
     assert len(record["objectives"]) == 2 and record["objective"] == max(record["objectives"])
+    worst = int(np.argmax(record["objectives"]))
+    assert record["throw_face_counts"][worst] == record["face_counts"]  # every throw's counts, for corrections
+
+
+def test_cli_robust_optimizes_by_defect_correction_unless_told(run, tmp_path):
+    code, out, err = run("optimize", "fudge-gem", "--model", "simulation", "--robust", "--start", "design",
+                         "--sims-per-eval", "20", "--max-sims-per-eval", "20", "--max-evals", "2", "--workers", "1",
+                         "--out", tmp_path, "--name", "r", "--json")  # fmt: skip
+    assert code == 0, err
+    report = json.loads(out)
+    spec = json.loads((tmp_path / "r" / "run.json").read_text())
+    assert spec["method"] == "correction" and len(spec["robust"]) == 5
+    assert report["evaluations"] == 2 and len(report["objectives"]) == 5
+    records = [json.loads(line) for line in (tmp_path / "r" / "evaluations.jsonl").read_text().splitlines()]
+    assert [r["kind"] for r in records] == ["start", "correction"]
 
 
 def test_cli_robust_needs_simulation(bad):

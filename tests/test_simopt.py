@@ -48,9 +48,12 @@ def _records(folder):
     return [json.loads(line) for line in (folder / "evaluations.jsonl").read_text().splitlines()]
 
 
-@pytest.mark.parametrize("method", ["cma", "nm"])
+@pytest.mark.parametrize("method", ["cma", "nm", pytest.param("correction", marks=pytest.mark.slow)])
 def test_resume_after_a_kill_continues_the_same_trajectory(tmp_path, method):
     spec = _spec(method=method)
+    if method == "correction":  # each round re-fits the fast model: two parameters keep that quick
+        names = ("a", "d")
+        spec = _spec(method=method, names=names, x0=tuple(start_point(load_design("fudge-gem"), names, model="design")))
     whole = _run(spec, tmp_path / "whole", 9)
     _run(spec, tmp_path / "killed", 6)
     # the kill: the 6th evaluation was being written when the process died
@@ -122,6 +125,52 @@ def test_a_stop_at_any_evaluation_keeps_a_best(method):
     spec = _spec(sims_per_eval=100, max_sims=800, method=method)
     for limit in range(1, 300):
         assert optimize_by_simulation(spec, objective=Fake(), max_evaluations=limit).best is not None
+
+
+def test_defect_correction_finds_the_minimax_of_the_corrected_model():
+    """A 'simulation' that is the fast model plus a fixed defect per throw: the first re-fit is the answer."""
+    from diefab.models import model_probabilities
+    from diefab.optimize import OBJECTIVES, Problem, _polyhedron, candidate_mass, optimize_design
+
+    d = load_design("fudge-gem")
+    names = ("a", "d")  # each round re-fits the fast model: two parameters keep that quick
+    m = len(d.polyhedron.names)
+    rng = np.random.default_rng(1)
+    defects = rng.normal(scale=0.01, size=(2, m))
+    defects -= defects.mean(axis=1, keepdims=True)
+    problem = Problem(d, names, "fast")
+    goal = d.target_distribution.aligned(d.support)
+    index = np.array([d.support.index(d.values[n]) for n in d.polyhedron.names])
+
+    class Fake:
+        k = 9
+
+        def __call__(self, x, drops):
+            params = problem.params(np.asarray(x))
+            poly = _polyhedron(d, params)
+            fast = model_probabilities("fast", poly, candidate_mass(d, poly), d.fill)
+            rows = np.clip(fast + defects, 0, None)
+            rows /= rows.sum(axis=1, keepdims=True)
+            each = [float(OBJECTIVES["eq2"](np.bincount(index, weights=r, minlength=9), goal)) for r in rows]
+            return {
+                "x": list(x),
+                "params": params,
+                "drops": drops,
+                "objective": max(each),
+                "feasible": True,
+                "min_margin": 1.0,
+                "objectives": each,
+                "throw_face_counts": (rows * drops).tolist(),
+            }
+
+    x0 = tuple(start_point(d, names, model="design"))
+    spec = _spec(method="correction", names=names, x0=x0, sims_per_eval=100, max_sims=200, robust=({}, {}))
+    result = optimize_by_simulation(spec, objective=Fake(), max_evaluations=20)
+    assert result.finished  # converged at each drop count, then out of drop counts
+    start = Fake()(np.array(spec.x0), 100)["objective"]
+    minimax = optimize_design(d, model="fast", names=names, starts=0, correction=defects).objective
+    assert result.best["objective"] < start
+    assert result.best["objective"] == pytest.approx(minimax, rel=0.05)
 
 
 def test_noise_floor():

@@ -7,6 +7,7 @@ from pathlib import Path
 import click
 import numpy as np
 
+from ..calibrate import DEFAULT_FREE
 from ..files import atomic_write, output_path
 from .common import console, emit_json, get_design, json_option, out_option, physics_file_option, run_logged
 
@@ -54,7 +55,7 @@ def _dice(die_args, realrolls):
               metavar="FILE",
               help="A die of the real-rolls JSON format: geometry, mass and counts (repeatable).")  # fmt: skip
 @click.option("--name", default="calibrated", show_default=True, help="Name of the run and of the profile.")
-@click.option("--free", default=",".join(("restitution", "friction", "spin", "drop_height")), show_default=True,
+@click.option("--free", default=",".join(DEFAULT_FREE), show_default=True,
               metavar="A,B,...", help="Physics parameters to fit: restitution, friction, rolling_friction, "
               "spinning_friction, spin (top of the spin range), speed (top of the speed range), "
               "drop_height.")  # fmt: skip

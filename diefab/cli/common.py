@@ -169,8 +169,10 @@ def simulation_options(func):
                      help="[simulation] Wall-time budget of the whole run, minutes."),
         click.option("--resume", "resume", type=click.Path(path_type=Path), default=None, metavar="RUN_DIR",
                      help="[simulation] Continue the interrupted run in RUN_DIR."),
-        click.option("--method", type=click.Choice(["cma", "nm"]), default="cma", show_default=True,
-                     help="[simulation] CMA-ES or Nelder-Mead restarts."),
+        click.option("--method", type=click.Choice(["cma", "nm", "correction"]), default=None,
+                     help="[simulation] CMA-ES, Nelder-Mead restarts, or defect correction (the fast model "
+                     "corrected per throw by each round's drops, minimized in between) [default: cma; "
+                     "correction with --robust]."),
         click.option("--start", "start_model", type=click.Choice(["fast", "solid-angle", "design"]), default="fast",
                      show_default=True, help="[simulation] Start from this model's optimum or the design itself."),
         click.option("--sigma", type=float, default=0.1, show_default=True,

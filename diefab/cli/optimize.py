@@ -223,6 +223,8 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         raise click.BadParameter(f"{min_margin} must be a non-negative number", param_hint="--min-margin")
     d = apply_fill(get_design(design, params, target), **(fill or {}))
     d.check_stable(0.0)
+    if method is None and resume is None:
+        method = "correction" if robust else "cma"
     inputs = design_inputs(design, d)
     warning = None
     budget_given = ctx.get_parameter_source("budget").name == "COMMANDLINE"
