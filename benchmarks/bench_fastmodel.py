@@ -12,12 +12,23 @@ sets of designs:
   misses) from all of it, with the RBF smoothing chosen by 5-fold
   cross-validation, and writes ``diefab/data/gem-discrepancy.json``;
 * a **test** set (``--designs`` designs, ``--drops`` drops each, 30,000 by
-  default) on which the table and the median TVD are reported.
+  default) on which the table and the median TVD are reported, beside the
+  sampling noise floor (the median TVD a perfect model would score at
+  those drops).
+
+**Fill mode** (``--fill paper|print|shell``): the test gems are made in that
+fill at its default settings (160 g/m² card with the net's glue tabs; the
+default print) and simulated with their bodies; the table adds the fast
+model without the fill's own correction (``no-layer``) and as it was before
+it knew the fill (``fast-solid``: solid-trained, solid inertia).  The fill's
+correction is learned by ``learn_fill_correction.py`` from gems of another
+design seed.
 
 Simulated counts are cached in ``benchmarks/results/fastmodel.json`` (about
-600 bytes per design), keyed by parameters, drops, seed and
-physics settings, so a rerun only simulates what is missing and an
-interrupted run loses at most the design in flight.
+600 bytes per design), keyed by parameters, drops, seed, physics settings
+and fill settings (a made gem's body, centre and inertia, is kept beside
+its counts), so a rerun only simulates what is missing and an interrupted
+run loses at most the design in flight.
 
 Usage::
 
@@ -28,6 +39,7 @@ Usage::
     python benchmarks/bench_fastmodel.py --learn          # relearn the gem discrepancy (~20 min to simulate)
     python benchmarks/bench_fastmodel.py --ablation       # its coordinates and training size, cross-validated
     python benchmarks/bench_fastmodel.py --optima         # the 4dF optima of fast and chain, validated (30k drops)
+    python benchmarks/bench_fastmodel.py --fill paper --test-seed 707 --designs 12 --drops 10000  # fill mode
 """
 
 from __future__ import annotations
@@ -42,6 +54,7 @@ import numpy as np
 
 from diefab.design import load_design
 from diefab.files import atomic_write
+from diefab.geometry import face_margins
 from diefab.stats import jsd, pearson_divergence, tvd
 
 RESULTS = Path(__file__).with_name("results") / "fastmodel.json"
@@ -52,10 +65,19 @@ SMOOTHING = (1e-4, 1e-3, 1e-2, 1e-1, 1.0)
 FOLDS = 5
 #: Random designs must rest on every face with at least this margin (model units).
 MIN_MARGIN = 0.02
+#: Fills whose bodies are made (the net's tabs, the print's walls and labels) and recorded beside their counts.
+MADE = ("paper", "print")
 
 
-def random_designs(k: int, seed: int, fill: str = "solid"):
-    """`k` random stable gems, uniform in the family box (e included), rejection-sampled."""
+def iter_random_designs(seed: int, fill: str = "solid"):
+    """Random stable gems, uniform in the family box (e included), rejection-sampled, one at a time.
+
+    A solid or shell gem is kept when it rests on every face with a margin of
+    at least :data:`MIN_MARGIN`.  A paper or printed gem's body takes seconds
+    to build (the net's glue tabs, the print's labels), so it is built only
+    for a gem whose shell rests so, and the gem is kept when its own body
+    rests on every face with at least half that margin.
+    """
     from dataclasses import replace
 
     from diefab.errors import DesignError
@@ -65,18 +87,27 @@ def random_designs(k: int, seed: int, fill: str = "solid"):
     base = replace(load_design("fudge-gem"), fill=Fill(kind=fill))
     bounds = GEM.bounds(["a", "b", "c", "d", "e"])
     rng = np.random.default_rng(seed)
-    out = []
-    while len(out) < k:
+    made = fill not in ("solid", "shell")
+    while True:
         x = bounds[:, 0] + rng.random(5) * (bounds[:, 1] - bounds[:, 0])
         params = dict(zip("abcde", np.round(x, 4).tolist()))
         try:
             d = base.with_params(**params)
-            if d.margins().min() < MIN_MARGIN:
+            if made:
+                if d.margins(Fill(kind="shell")).min() < MIN_MARGIN or d.margins().min() < MIN_MARGIN / 2:
+                    continue
+            elif d.margins().min() < MIN_MARGIN:
                 continue
         except DesignError:
             continue
-        out.append(d)
-    return out
+        yield d
+
+
+def random_designs(k: int, seed: int, fill: str = "solid"):
+    """`k` random stable gems (:func:`iter_random_designs`)."""
+    from itertools import islice
+
+    return list(islice(iter_random_designs(seed, fill), k))
 
 
 def physics_version() -> str:
@@ -109,12 +140,27 @@ def save_cache(cache: dict) -> None:
     atomic_write(RESULTS, '{"runs": [\n' + lines + "\n]}\n")
 
 
-def simulated(designs, drops: int, seed: int, which: str, cache: dict, workers: int | None) -> list[dict]:
-    """Counts of every design, from the cache or simulated now (and cached at once)."""
+def body_record(d) -> dict:
+    """The mass properties a gem was simulated with: centre and inertia over mass, model units (rounded)."""
+    body = d.mass_properties()
+    return {"center": np.round(body.center, 10).tolist(), "inertia": np.round(body.inertia / body.mass, 10).tolist()}
+
+
+def simulated(designs, drops: int, seed: int, which: str, cache: dict, workers: int | None,
+              total: int | None = None) -> tuple[list, list[dict]]:  # fmt: skip
+    """Every design with its counts, from the cache or simulated now (and cached at once).
+
+    `designs` may be a lazy iterable of `total` designs: a made gem is then
+    simulated right after it is drawn, while its body is still cached.  The
+    body a paper or printed gem was simulated with is kept beside its counts
+    (:func:`body_record`), so learning need not rebuild it and can tell when
+    the body model has changed since.
+    """
     from diefab.physics import PhysicsSettings, simulate
 
     settings = PhysicsSettings().as_dict()
-    out = []
+    total = len(designs) if total is None else total
+    out, drawn = [], []
     for i, d in enumerate(designs):
         # a made fill's settings are part of what was simulated (the print model has changed before)
         fill = d.fill.kind if d.fill.kind in ("solid", "shell") else json.dumps(d.fill.to_mapping(), sort_keys=True)
@@ -136,11 +182,25 @@ def simulated(designs, drops: int, seed: int, which: str, cache: dict, workers: 
                 "unsettled": r.unsettled,
                 "seconds": r.seconds,
             }
+            if d.fill.kind in MADE:
+                cache[key]["body"] = body_record(d)
             save_cache(cache)
-            print(f"  simulated {which} {i + 1}/{len(designs)}: {drops} drops in {time.perf_counter() - t:.1f} s",
+            print(f"  simulated {which} {i + 1}/{total}: {drops} drops in {time.perf_counter() - t:.1f} s",
                   file=sys.stderr, flush=True)  # fmt: skip
+        elif d.fill.kind in MADE and "body" not in cache[key]:
+            cache[key]["body"] = body_record(d)
         out.append(cache[key])
-    return out
+        drawn.append(d)
+    return drawn, out
+
+
+def noise_floor(q: np.ndarray, drops: np.ndarray) -> np.ndarray:
+    """(n,) expected TVD between a sample of `drops` landings and its own distribution `q` (n, m).
+
+    ``sum_i sqrt(q_i (1 - q_i) / (2 pi N))``, the normal approximation of
+    ``E|f_i - q_i| / 2`` summed over faces: what a perfect model would score.
+    """
+    return np.sqrt(q * (1 - q) / (2 * np.pi * np.asarray(drops, dtype=float)[:, None])).sum(axis=1)
 
 
 def frequencies(runs) -> np.ndarray:
@@ -156,29 +216,14 @@ def chain_probabilities(designs) -> np.ndarray:
     return np.array([landing_probabilities(d.polyhedron, d.mass_properties().center) for d in designs])
 
 
-def base_probabilities(designs) -> np.ndarray:
-    """(n, m) what a fill's correction is learned on top of: the fast model with the body's inertia, no fill layer."""
-    from diefab.fastmodel import fast_model
-
-    out = []
-    for d in designs:
-        body = d.mass_properties()
-        out.append(fast_model(d.polyhedron, body.center, inertia=body.inertia / body.mass))
-    return np.array(out)
-
-
 class TrainingSet:
-    """The training designs with what the discrepancy is learned from.
+    """The solid training gems with what the gem discrepancy is learned from (the chain's probabilities)."""
 
-    Solid gems: the chain's probabilities (the gem discrepancy); gems of
-    another fill: the fast model without that fill's layer (:func:`base_probabilities`).
-    """
-
-    def __init__(self, designs, runs, fill: str = "solid"):
-        self.designs, self.fill = designs, fill
+    def __init__(self, designs, runs):
+        self.designs = designs
         self.points = np.array([[d.params[n] for n in "abcde"] for d in designs])
         self.q = frequencies(runs)
-        self.p = chain_probabilities(designs) if fill == "solid" else base_probabilities(designs)
+        self.p = chain_probabilities(designs)
         self.margins = np.array([d.margins() for d in designs])
 
     def cross_validate(self, n: int | None = None, distances: bool = False, **kw):
@@ -207,38 +252,24 @@ class TrainingSet:
 
 
 def learn(training: TrainingSet, drops: int, seed: int, design_seed: int = TRAIN_SEED) -> dict:
-    """Learn the gem discrepancy (or a fill's correction) from the training set and write it into the package.
+    """Learn the gem discrepancy from the solid training set and write it into the package.
 
     The smoothing is chosen from :data:`SMOOTHING` by 5-fold cross-validation
     (fixed folds, each fold learning from the others): the largest whose mean
     held-out TVD is within 1 % of the least (more smoothing, same accuracy).
-    A fill's correction, learned from fewer designs, also chooses its
-    coordinates (parameters alone, or with the margins and probabilities)
-    the same way.
+    A fill's correction is learned by ``learn_fill_correction.py``.
     """
     from diefab import fastmodel
-    from diefab.errors import DesignError
     from diefab.physics import PhysicsSettings
 
     scores = {}
-    # a fill's correction, learned from few designs, also chooses its coordinates and kernel
-    choices = [(True, "thin_plate_spline")]
-    if training.fill != "solid":
-        choices = [(c, k) for c in (False, True) for k in ("thin_plate_spline", "linear")]
-    for physics, kernel in choices:
-        for smoothing in SMOOTHING:
-            try:
-                err = training.cross_validate(smoothing=smoothing, physics_coordinates=physics, kernel=kernel)
-            except DesignError:  # too few designs in a fold for these coordinates
-                continue
-            scores[physics, kernel, smoothing] = (float(np.median(err)), float(np.mean(err)))
-            print(f"  {'margins+chain' if physics else 'parameters'} {kernel} smoothing {smoothing:g}: "
-                  f"{FOLDS}-fold CV TVD median {scores[physics, kernel, smoothing][0]:.4f} "
-                  f"mean {scores[physics, kernel, smoothing][1]:.4f}", file=sys.stderr, flush=True)  # fmt: skip
+    for smoothing in SMOOTHING:
+        err = training.cross_validate(smoothing=smoothing)
+        scores[smoothing] = (float(np.median(err)), float(np.mean(err)))
+        print(f"  smoothing {smoothing:g}: {FOLDS}-fold CV TVD median {scores[smoothing][0]:.4f} "
+              f"mean {scores[smoothing][1]:.4f}", file=sys.stderr, flush=True)  # fmt: skip
     least = min(v[1] for v in scores.values())
-    # the largest smoothing within 1 % of the least mean (physics coordinates and thin-plate splines first)
-    physics, kernel, best = max((k for k, v in scores.items() if v[1] <= 1.01 * least),
-                                key=lambda k: (k[2], k[0], k[1] == "thin_plate_spline"))  # fmt: skip
+    best = max(k for k, v in scores.items() if v[1] <= 1.01 * least)
     before = np.array([tvd(p, q) for p, q in zip(training.p, training.q)])
     names = ("temperature", "tau", "area_power", "roll_power", "height_weight")
     info = {
@@ -250,24 +281,14 @@ def learn(training: TrainingSet, drops: int, seed: int, design_seed: int = TRAIN
         "physics": physics_version(),
         "settings": PhysicsSettings().as_dict(),
         "chain": {k: getattr(fastmodel, k.upper()) for k in names},
-        "cv": {
-            f"{k:g}": {"median_tvd": round(v[0], 5), "mean_tvd": round(v[1], 5)}
-            for (c, kern, k), v in scores.items()
-            if c == physics and kern == kernel
-        },  # fmt: skip
+        "cv": {f"{k:g}": {"median_tvd": round(v[0], 5), "mean_tvd": round(v[1], 5)} for k, v in scores.items()},
     }
     name = fastmodel.DISCREPANCY_FILE
-    if training.fill != "solid":
-        info["fill"] = training.designs[0].fill.to_mapping()
-        info["on_top_of"] = "fast model without this layer (chain with the body's inertia + gem discrepancy)"
-        info["before_median_tvd"] = round(float(np.median(before)), 5)
-        name = fastmodel.fill_discrepancy_file(training.fill)
-    fit = training.learn(smoothing=best, physics_coordinates=physics, kernel=kernel, info=info)
+    fit = training.learn(smoothing=best, info=info)
     atomic_write(DISCREPANCY / name, fit.to_json())
     fastmodel.gem_discrepancy.cache_clear()
-    fastmodel._packaged_layer.cache_clear()
-    score = scores[physics, kernel, best]
-    out = {"file": name, "smoothing": best, "physics_coordinates": physics, "kernel": kernel}
+    score = scores[best]
+    out = {"file": name, "smoothing": best}
     return out | {"cv_median_tvd": score[0], "cv_mean_tvd": score[1], "median_tvd_without": float(np.median(before))}
 
 
@@ -325,10 +346,8 @@ def main(argv=None) -> None:
     ap.add_argument("--drops", type=int, default=30_000, help="drops per test design")
     ap.add_argument("--test-seed", type=int, default=TEST_SEED, help="design seed of the test set")
     ap.add_argument("--fill", choices=("solid", "shell", "paper", "print"), default="solid",
-                    help="fill of the test gems (the discrepancy was learned on solid ones)")  # fmt: skip
-    ap.add_argument("--train-fill", choices=("solid", "shell", "paper", "print"), default="solid",
-                    help="fill of the training gems (--learn: solid learns the gem discrepancy, "
-                         "another fill that fill's correction on top of it)")  # fmt: skip
+                    help="fill of the test gems, at its default settings (fill mode: the fast model with that "
+                         "fill's correction, learned by learn_fill_correction.py)")  # fmt: skip
     ap.add_argument("--train-designs", type=int, default=800)
     ap.add_argument("--train-seed", type=int, default=TRAIN_SEED, help="design seed of the training set")
     ap.add_argument("--train-drops", type=int, default=4_000)
@@ -341,24 +360,23 @@ def main(argv=None) -> None:
     ap.add_argument("--optima", action="store_true", help="validate the 4dF optima of the fast model and its chain")
     ap.add_argument("--collect-only", action="store_true", help="simulate (fill the cache) and stop")
     args = ap.parse_args(argv)
-    if args.ablation and args.train_fill != "solid":
-        ap.error("--ablation studies the solid gems' discrepancy; leave out --train-fill")
     if args.calibrate and (args.learn or args.ablation):
         ap.error("--calibrate prints constants to paste into fastmodel.py; --learn afterwards, in a second run")
+
+    from itertools import islice
 
     cache = load_cache()
     # the training set is simulated only when it is used
     if args.learn or args.ablation or args.collect_only:
-        train = random_designs(args.train_designs, args.train_seed, args.train_fill)
+        k, train = args.train_designs, islice(iter_random_designs(args.train_seed), args.train_designs)
     else:
-        train = random_designs(args.chain_designs, TRAIN_SEED) if args.calibrate else []
-    test = random_designs(args.designs, args.test_seed, args.fill)
-    train_which = "train" if args.train_fill == "solid" else f"train-{args.train_fill}"
-    train_runs = simulated(train, args.train_drops, args.seed, train_which, cache, args.workers)
+        k = args.chain_designs if args.calibrate else 0
+        train = random_designs(k, TRAIN_SEED)
+    train, train_runs = simulated(train, args.train_drops, args.seed, "train", cache, args.workers, k)
     which = "test" if args.test_seed == TEST_SEED else f"test-{args.test_seed}"
     which += "" if args.fill == "solid" else f"-{args.fill}"
-    test_runs = simulated(test, args.drops, args.seed, which, cache, args.workers)
-    save_cache(cache)
+    test = islice(iter_random_designs(args.test_seed, args.fill), args.designs)
+    test, test_runs = simulated(test, args.drops, args.seed, which, cache, args.workers, args.designs)
     if args.collect_only:
         return
 
@@ -370,10 +388,10 @@ def main(argv=None) -> None:
         fit = fastmodel.calibrate(train, [np.array(r["face_counts"]) for r in train_runs])
         print(f"calibrated the chain on {len(train)} training designs x {args.train_drops} drops: {fit}")
         constants = {k: v for k, v in fit.items() if k != "mean_tvd"}
-    training = TrainingSet(train, train_runs, args.train_fill) if (args.learn or args.ablation) else None
+    training = TrainingSet(train, train_runs) if (args.learn or args.ablation) else None
     if args.learn:
         fit = learn(training, args.train_drops, args.seed, args.train_seed)
-        print(f"learned from {len(train)} {args.train_fill} training designs x {args.train_drops} drops: {fit}")
+        print(f"learned from {len(train)} training designs x {args.train_drops} drops: {fit}")
 
     if not test:  # --designs 0: learning (or calibrating) only
         return
@@ -384,21 +402,33 @@ def main(argv=None) -> None:
     def solid_trained(poly, center, *, fill=None, inertia=None):
         return MODELS["fast"](poly, center)
 
+    def no_layer(poly, center, *, fill=None, inertia=None):
+        from diefab.families import gem_parameters
+
+        at = fastmodel.fill_discrepancy(args.fill).discrepancy_at
+        return fastmodel.made_gem_base(poly, center, inertia, gem_parameters(poly), face_margins(poly, center), at)
+
     # with new chain constants the packaged discrepancy (learned against the old chain) does not apply
     models = {"fast": MODELS["fast"], "chain": chain, "solid": MODELS["solid-angle"]}
-    if args.fill != "solid":  # the fast model as it was before it knew the fill, for comparison
-        models["fast-solid"] = solid_trained
+    if args.fill != "solid":  # the fast model without the fill's correction, and as it was before it knew the fill
+        models |= {"no-layer": no_layer, "fast-solid": solid_trained}
     if args.calibrate:
         del models["fast"]
     found = fastmodel.gem_discrepancy()
     rows, near = [], []
-    for d, q in zip(test, frequencies(test_runs)):
-        body = d.mass_properties()
-        poly, center = d.polyhedron, body.center
-        kw = {"fill": d.fill, "inertia": body.inertia / body.mass}
+    margins = []
+    for d, r, q in zip(test, test_runs, frequencies(test_runs)):
+        poly = d.polyhedron
+        if "body" in r:  # a made gem: the body it was simulated with (rebuilding a net's tabs takes seconds)
+            center, inertia = np.array(r["body"]["center"]), np.array(r["body"]["inertia"])
+        else:
+            body = d.mass_properties()
+            center, inertia = body.center, body.inertia / body.mass
+        margins.append(face_margins(poly, center).min())
+        kw = {"fill": d.fill, "inertia": inertia}
         rows.append([tvd(fn(poly, center, **kw) if name != "solid" else fn(poly, center), q)
                      for name, fn in models.items()])  # fmt: skip
-        near.append(found.distance(d.params, d.margins(), fastmodel.landing_probabilities(poly, center)))
+        near.append(found.distance(d.params, face_margins(poly, center), fastmodel.landing_probabilities(poly, center)))
     rows = np.array(rows)
 
     info = found.info
@@ -410,13 +440,14 @@ def main(argv=None) -> None:
     for i, (d, r, row) in enumerate(zip(test, test_runs, rows)):
         p = d.params
         print(f"{i:3d} {p['a']:6.3f} {p['b']:6.3f} {p['c']:6.3f} {p['d']:6.3f} {p['e']:6.3f} "
-              f"{d.margins().min():7.3f} {r['cocked'] / r['drops']:7.2%} {near[i]:7.3f}  "
+              f"{margins[i]:7.3f} {r['cocked'] / r['drops']:7.2%} {near[i]:7.3f}  "
               + " ".join(f"{t:9.4f}" for t in row))  # fmt: skip
     med, worst = np.median(rows, axis=0), rows.max(axis=0)
-    noise = np.sqrt((9 - 1) / (2 * np.pi * args.drops))
+    counts = np.array([r["face_counts"] for r in test_runs], dtype=float)
+    noise = float(np.median(noise_floor(frequencies(test_runs), counts.sum(axis=1))))
     print("median TVD: " + ", ".join(f"{m} {v:.4f}" for m, v in zip(models, med))
-          + "; max: " + ", ".join(f"{m} {v:.4f}" for m, v in zip(models, worst))
-          + f"; sampling noise alone ~{noise:.4f}")  # fmt: skip
+          + f" (sampling noise floor {noise:.4f}: the median TVD a perfect model would score at these drops)"
+          + "; max: " + ", ".join(f"{m} {v:.4f}" for m, v in zip(models, worst)))  # fmt: skip
     if not args.calibrate:
         print(f"solid angles / fast {med[2] / med[0]:.1f}x, chain alone / fast {med[1] / med[0]:.1f}x (medians); "
               f"'nearest': distance to the nearest training gem in the discrepancy's coordinates")  # fmt: skip
@@ -428,11 +459,12 @@ def main(argv=None) -> None:
         layer = fastmodel.fill_discrepancy(args.fill)
         if layer is not None:
             li = layer.info
-            cv = li["cv"][f"{layer.smoothing:g}"]
-            print(f"{args.fill} fill: its correction learned from {li['designs']} {li['fill']['kind']} gems x "
-                  f"{li['drops']} drops (coordinates: {'margins+chain' if layer.physics_coordinates else 'parameters'}"
-                  f", smoothing {layer.smoothing:g}), {FOLDS}-fold CV median TVD {cv['median_tvd']:.4f} "
-                  f"(without it {li['before_median_tvd']:.4f}; at {li['drops']} drops, noise included)")  # fmt: skip
+            cv = li["cv"][f"{layer.discrepancy_at} {layer.coordinates} {layer.penalty:g}"]
+            print(f"{args.fill} fill: its correction learned from {li['designs']} other {li['fill']['kind']} gems "
+                  f"(median {li['drops']} drops; solid discrepancy at the {layer.discrepancy_at}, "
+                  f"{layer.coordinates} coordinates, penalty {layer.penalty:g}), "
+                  f"{FOLDS}-fold CV median TVD {cv['median_tvd']:.4f} (without it {li['before_median_tvd']:.4f}; "
+                  "noise included)")  # fmt: skip
     if args.ablation:
         ablation(training, test, frequencies(test_runs))
     if args.optima:

@@ -58,6 +58,11 @@ it misses is learned from simulations, one of two ways (:func:`fast_model`):
    polyhedron has (margins, barriers, areas, the chain's own shares ...),
    fitted to random dice of every family.
 
+A gem made of card or printed (a ``fill``) gets one more learned layer,
+its fill's :class:`FillCorrection`: what the model with the body's centre
+and inertia still misses for that fill, a regularized linear function of
+the shape, proportional to the body's inertia excess over the solid.
+
 The model of the physics *is* then partly a surrogate of the simulator.
 
 Examples
@@ -87,18 +92,23 @@ from .mass import Fill
 __all__ = [
     "AREA_POWER",
     "DISCREPANCY_FILE",
+    "FILL_COORDINATES",
     "FILL_LAYERS",
     "HEIGHT_WEIGHT",
     "ROLL_POWER",
     "TAU",
     "TEMPERATURE",
+    "DISCREPANCY_AT",
     "Discrepancy",
+    "FillCorrection",
+    "body_excess",
     "calibrate",
     "fast_model",
     "fill_discrepancy",
     "fill_discrepancy_file",
     "gem_discrepancy",
     "landing_probabilities",
+    "made_gem_base",
     "roll_retention",
     "tipping_barriers",
 ]
@@ -307,8 +317,10 @@ def fast_model(poly: Polyhedron, center: np.ndarray, *, fill: Fill | None = None
     `inertia` if given) with a learned correction.  For a gem inside the
     family box with every face stable, the gem family's discrepancy
     (:func:`gem_discrepancy`), and for a gem made with a `fill` that has a
-    learned correction of its own (:func:`fill_discrepancy`: printed, or
-    card), that as well.  Every other die gets the per-face logit correction
+    learned correction of its own (:func:`fill_discrepancy`: paper,
+    print, shell), that as well, in proportion to how far the body's
+    inertia lies from the solid's (a body with the solid's inertia gets
+    the solid's prediction).  Every other die gets the per-face logit correction
     learned from random dice of every family
     (:func:`diefab.correction.corrected`).  A gem is recognized by
     :func:`~diefab.families.gem_parameters`: built by the gem family, not the
@@ -332,9 +344,12 @@ def fast_model(poly: Polyhedron, center: np.ndarray, *, fill: Fill | None = None
     if params is not None:
         margins = face_margins(poly, center)
         if gem_discrepancy().covers(params, margins):
-            p = gem_discrepancy().correct(landing_probabilities(poly, center, inertia=inertia), params, margins)
             layer = fill_discrepancy(fill.kind) if fill is not None else None
-            return p if layer is None else layer.correct(p, params, margins)
+            excess = body_excess(poly, inertia) if layer is not None else 0.0
+            if excess == 0:  # a solid, or a body with the solid's inertia: the solid gems' model
+                return gem_discrepancy().correct(landing_probabilities(poly, center, inertia=inertia), params, margins)
+            p = made_gem_base(poly, center, inertia, params, margins, layer.discrepancy_at)
+            return layer.correct(p, params, margins, excess)
     return corrected(poly, center, inertia=inertia)
 
 
@@ -346,6 +361,16 @@ DISCREPANCY_FILE = "gem-discrepancy.json"
 
 #: Mirror-image faces of every gem (x -> -x: f2 <-> f4, f7 <-> f9; z -> -z: f1 <-> f3, f6 <-> f8).
 _GEM_MIRRORS = ((0, 2), (1, 3), (5, 7), (6, 8))
+
+
+def _table_json(table, scalars: tuple[str, ...], digits: int) -> str:
+    """JSON of a learned table: its `scalars` and box, then one training gem per line in each of its ``_ARRAYS``."""
+    head = {k: getattr(table, k) for k in scalars} | {"lower": table.lower.tolist(), "upper": table.upper.tolist()}
+    body = json.dumps(head, indent=1, sort_keys=True)[:-2]
+    for name in table._ARRAYS:
+        rows = ",\n".join(json.dumps(r) for r in np.round(getattr(table, name), digits).tolist())
+        body += f',\n "{name}": [\n{rows}\n]'
+    return body + "\n}\n"
 
 
 @dataclass(frozen=True, eq=False)
@@ -471,13 +496,7 @@ class Discrepancy:
 
     def to_json(self) -> str:
         """JSON text, one training design per line in each array (:meth:`from_json` reads it back)."""
-        head = {k: getattr(self, k) for k in ("parameters", "smoothing", "physics_coordinates", "info", "kernel")}
-        head |= {"lower": self.lower.tolist(), "upper": self.upper.tolist()}
-        body = json.dumps(head, indent=1, sort_keys=True)[:-2]
-        for name in self._ARRAYS:
-            rows = ",\n".join(json.dumps(r) for r in np.round(getattr(self, name), 6).tolist())
-            body += f',\n "{name}": [\n{rows}\n]'
-        return body + "\n}\n"
+        return _table_json(self, ("parameters", "smoothing", "physics_coordinates", "info", "kernel"), 6)
 
     @cached_property
     def _feature_range(self) -> tuple[np.ndarray, np.ndarray]:
@@ -559,34 +578,313 @@ def gem_discrepancy() -> Discrepancy:
     return Discrepancy.from_json(resources.files("diefab").joinpath("data", DISCREPANCY_FILE).read_text())
 
 
-#: The fills with a learned correction of their own, and the fill each was learned in (card: the thin shell).
-FILL_LAYERS = {"print": "print", "paper": "shell", "shell": "shell"}
+# ---------------------------------------------------------------------------
+# The fill correction: what a card or printed gem does that the solid gems' discrepancy misses
+
+#: The fills with a learned correction of their own (each learned in that fill at its default settings).
+FILL_LAYERS = ("paper", "print", "shell")
+
+#: For each face, the index of its mirror class in :attr:`Discrepancy.CLASSES` (f1, f2, f5, f6, f7).
+_CLASS_OF_FACE = np.array([0, 1, 0, 1, 2, 3, 4, 3, 4])
+
+#: Fewest training gems a fill correction is learned from (the ridge penalty keeps any coordinates well posed).
+_FILL_MIN_GEMS = 8
+
+#: Where a made gem's base model evaluates the solid gems' discrepancy (:func:`made_gem_base`).
+DISCREPANCY_AT = ("body", "solid")
+
+#: Coordinates a fill correction can be a linear function of (:meth:`FillCorrection.learn`), simplest first.
+FILL_COORDINATES = ("constant", "shape", "physics")
 
 
 def fill_discrepancy_file(kind: str) -> str:
-    """Name of the packaged correction learned in the fill `kind` (a key of :data:`FILL_LAYERS`' values)."""
+    """Name of the packaged correction learned in the fill `kind` (one of :data:`FILL_LAYERS`)."""
     return f"gem-discrepancy-{kind}.json"
 
 
-def fill_discrepancy(kind: str) -> Discrepancy | None:
-    """The gem correction for dice made with a fill of `kind`, on top of :func:`gem_discrepancy`; None for none.
+def _mirror_means(x: np.ndarray) -> np.ndarray:
+    """`x` (..., 9) with each mirror pair of faces replaced by its mean."""
+    x = np.array(x, dtype=float)
+    for i, j in _GEM_MIRRORS:
+        x[..., [i, j]] = x[..., [i, j]].mean(axis=-1, keepdims=True)
+    return x
 
-    Learned like the gem discrepancy, from random stable gems simulated in
-    that fill, as the simulated frequencies minus the fast model without it
-    (the chain with the body's inertia, corrected by the solid gems'
-    discrepancy).  A printed die gets the print's correction; a card die,
-    paper or shell, the thin shell's (the card's thickness and its tabs
-    move the centre of mass, which the chain takes, and barely change the
-    inertia).  Learned at the fill's default settings (``info["fill"]``).
+
+def made_gem_base(
+    poly: Polyhedron,
+    center: np.ndarray,
+    inertia: np.ndarray | None,
+    params: Mapping[str, float],
+    margins: np.ndarray,
+    at: str = "body",
+) -> np.ndarray:
+    """(9,) float: the fast model of a gem made in a fill, before the fill's own correction.
+
+    The chain with the body's centre and inertia, plus the solid gems'
+    discrepancy (:func:`gem_discrepancy`) evaluated ``at``:
+
+    - ``"body"``: at the body's own coordinates (the shape, and the margins
+      and chain probabilities of its centre), as for a solid;
+    - ``"solid"``: where it was learned, at the solid gem of the same shape.
+      A made body's centre takes the body's coordinates off the set the
+      solid gems span, where the interpolant extrapolates, while the change
+      the body brings is what the chain models.  A shape whose solid rests
+      unstably on a face gets it at the body's coordinates.
+
+    Parameters
+    ----------
+    poly : Polyhedron
+        A gem (:func:`~diefab.families.gem_parameters` of it is `params`).
+    center : (3,) float
+        The body's centre of mass, model units.
+    inertia : (3, 3) float or None
+        The body's inertia about its centre over its mass (None: the solid's).
+    params : mapping
+        The gem's parameters.
+    margins : (9,) float
+        The body's stability margins (:func:`~diefab.geometry.face_margins` at `center`).
+    at : {"body", "solid"}
     """
-    learned = FILL_LAYERS.get(kind)
-    return None if learned is None else _packaged_layer(learned)
+    found = gem_discrepancy()
+    p = landing_probabilities(poly, center, inertia=inertia)
+    if at == "body":
+        return found.correct(p, params, margins)
+    if at != "solid":
+        raise DesignError(f"at={at!r} is not one of {', '.join(DISCREPANCY_AT)}")
+    from .mass import mass_properties
+
+    solid_center = mass_properties(poly).center
+    solid_margins = face_margins(poly, solid_center)
+    if not found.covers(params, solid_margins):
+        return found.correct(p, params, margins)
+    solid_chain = landing_probabilities(poly, solid_center)
+    weight = float(np.clip(solid_margins.min() / found.margins.min(), 0.0, 1.0))
+    residual = found(params, _mirror_means(solid_margins), _mirror_means(solid_chain))
+    out = np.clip(p + weight * residual, 0, None)
+    out[np.asarray(margins) < 0] = 0.0
+    total = out.sum()
+    return out / total if total > 0 else p
+
+
+def body_excess(poly: Polyhedron, inertia: np.ndarray | None) -> float:
+    """How far a body's inertia lies from the uniform solid's: ``tr(I) / tr(I_solid) - 1``.
+
+    Both tensors about their own centre of mass and per unit mass (model
+    units²); `inertia` None is the solid's (0).  A card shell carries its
+    mass on the surface (about 0.5-0.8 for a gem), a print on its walls
+    (about 0.2-0.3 at the default settings); a print at 100 % infill
+    without labels is the solid (0).
+    """
+    if inertia is None:
+        return 0.0
+    from .mass import mass_properties
+
+    solid = mass_properties(poly)
+    return float(np.trace(np.asarray(inertia, dtype=float)) / (np.trace(solid.inertia) / solid.mass) - 1.0)
+
+
+@dataclass(frozen=True, eq=False)
+class FillCorrection:
+    """A fill's correction of the gem's fast model: a regularized linear function, proportional to the body's excess.
+
+    A gem made of card or printed rolls unlike the solid gem of the same
+    centre of mass, because its mass sits further out (a larger radius of
+    gyration keeps more energy over an edge).  The fast model without this
+    layer (the chain with the body's centre and inertia, corrected by the
+    solid gems' :class:`Discrepancy`: :func:`made_gem_base`) misses part of
+    the effect.  What it misses, the simulated frequencies minus its
+    probabilities at random stable gems simulated in the fill, is fitted by
+    ridge regression as
+
+    ``r = s / s_mean * W @ phi``
+
+    per mirror class of faces, where ``s`` is the body's inertia excess
+    (:func:`body_excess`, ``s_mean`` its mean over the training gems) and
+    ``phi`` the coordinates: 1 alone (``constant``), with the parameters
+    scaled to the unit box (``shape``), or with each mirror class's
+    stability margin and probability as well (``physics``).  Because ``r``
+    is proportional to ``s``, a body with the solid's inertia gets no
+    correction, and the correction shrinks with the fill's excess (a print
+    with more infill); ``s`` is clipped to [0, the training gems' largest].
+    The coordinates and the ridge penalty are chosen by cross-validation
+    over gems (``benchmarks/learn_fill_correction.py``).
+
+    Mirror-image faces get the same residual, which sums to 0 over the
+    faces (the training residuals do, and the fit is linear in them).  Like
+    :class:`Discrepancy`, it applies inside the family box to gems that rest
+    on every face, and fades out as the smallest margin goes from the
+    training gems' least to 0.
+
+    Attributes
+    ----------
+    kind : str
+        The fill it was learned in.
+    coordinates : str
+        One of :data:`FILL_COORDINATES`.
+    penalty : float
+        Ridge penalty (on standardized coordinates; the constant is not penalized).
+    lower, upper : (5,) float
+        The family box of a, b, c, d, e.
+    points : (n, 5) float
+        Parameters of the training gems.
+    margins, base : (n, 9) float
+        Their stability margins (model units) and probabilities of the base
+        model (:func:`made_gem_base` with `discrepancy_at`), in the fill.
+    excess : (n,) float
+        Their :func:`body_excess`.
+    residuals : (n, 9) float
+        Simulated frequency minus `base` (mirror pairs averaged).
+    info : dict
+        How the data were made: fill settings, drops, seeds, physics, the
+        bodies of the first training gems (centre and inertia, to tell when
+        the body model has changed since), cross-validated error.
+    discrepancy_at : {"body", "solid"}
+        Where the base model evaluates the solid gems' discrepancy
+        (:func:`made_gem_base`; chosen by cross-validation with the rest).
+    """
+
+    kind: str
+    coordinates: str
+    penalty: float
+    lower: np.ndarray
+    upper: np.ndarray
+    points: np.ndarray
+    margins: np.ndarray
+    base: np.ndarray
+    excess: np.ndarray
+    residuals: np.ndarray
+    info: dict = field(default_factory=dict)
+    discrepancy_at: str = "body"
+
+    _ARRAYS = ("points", "margins", "base", "excess", "residuals")
+
+    @classmethod
+    def learn(
+        cls,
+        kind: str,
+        points: np.ndarray,
+        margins: np.ndarray,
+        base: np.ndarray,
+        excess: np.ndarray,
+        frequencies: np.ndarray,
+        *,
+        coordinates: str = "physics",
+        penalty: float = 1.0,
+        info: Mapping | None = None,
+        discrepancy_at: str = "body",
+    ) -> FillCorrection:
+        """The correction from simulated `frequencies` (n, 9) of gems made in fill `kind`.
+
+        `points` (n, 5) are their parameters, `margins` and `base` (n, 9)
+        their margins and fast-model probabilities without this layer,
+        `excess` (n,) their :func:`body_excess` (all positive); `base` was
+        computed by :func:`made_gem_base` with `discrepancy_at`.
+        """
+        if kind not in FILL_LAYERS:
+            raise DesignError(f"fill kind={kind!r} is not one of {', '.join(FILL_LAYERS)}")
+        if discrepancy_at not in DISCREPANCY_AT:
+            raise DesignError(f"discrepancy_at={discrepancy_at!r} is not one of {', '.join(DISCREPANCY_AT)}")
+        if coordinates not in FILL_COORDINATES:
+            raise DesignError(f"coordinates={coordinates!r} is not one of {', '.join(FILL_COORDINATES)}")
+        if not (np.isfinite(penalty) and penalty >= 0):
+            raise DesignError(f"penalty={penalty!r} must be a number >= 0")
+        points = np.asarray(points, dtype=float)
+        n = len(points)
+        arrays = {"points": (points, 5), "margins": (margins, 9), "base": (base, 9), "frequencies": (frequencies, 9)}
+        for name, (a, width) in arrays.items():
+            a = np.asarray(a, dtype=float)
+            if a.shape != (n, width) or not np.all(np.isfinite(a)):
+                raise DesignError(f"{name} must be a finite ({n}, {width}) array, got shape {a.shape}")
+        excess = np.asarray(excess, dtype=float)
+        if excess.shape != (n,) or not np.all(np.isfinite(excess)) or excess.min(initial=1.0) <= 0:
+            raise DesignError(f"excess must be ({n},) positive numbers (bodies unlike the solid)")
+        if n < _FILL_MIN_GEMS:
+            raise DesignError(f"need at least {_FILL_MIN_GEMS} training gems, got {n}")
+        margins = np.asarray(margins, dtype=float)
+        if margins.min() <= 0:
+            raise DesignError(f"training gems must be stable on every face; smallest margin {margins.min():g}")
+        base = np.asarray(base, dtype=float)
+        residuals = _mirror_means(np.asarray(frequencies, dtype=float) - base)
+        bounds = GEM.bounds([p.name for p in GEM.parameters])
+        return cls(
+            kind, coordinates, float(penalty), bounds[:, 0], bounds[:, 1], points, margins, base, excess, residuals,
+            dict(info or {}), discrepancy_at,
+        )  # fmt: skip
+
+    @classmethod
+    def from_json(cls, text: str) -> FillCorrection:
+        data = json.loads(text)
+        arrays = [np.array(data[k], dtype=float) for k in ("lower", "upper", *cls._ARRAYS)]
+        at = str(data.get("discrepancy_at", "body"))
+        return cls(data["kind"], data["coordinates"], float(data["penalty"]), *arrays, data["info"], at)
+
+    def to_json(self) -> str:
+        """JSON text, one training gem per line in each array (:meth:`from_json` reads it back)."""
+        return _table_json(self, ("kind", "coordinates", "penalty", "discrepancy_at", "info"), 8)
+
+    def _phi(self, points: np.ndarray, margins: np.ndarray, base: np.ndarray) -> np.ndarray:
+        """(n, k) float: the coordinates (mirror-class means of margins and probabilities)."""
+        cols = [np.ones((len(points), 1))]
+        if self.coordinates != "constant":
+            cols.append((points - self.lower) / (self.upper - self.lower))
+        if self.coordinates == "physics":
+            classes = list(Discrepancy.CLASSES)
+            cols += [_mirror_means(margins)[:, classes], _mirror_means(base)[:, classes]]
+        return np.hstack(cols)
+
+    @cached_property
+    def _weights(self) -> tuple[np.ndarray, float]:
+        """(k, 5) ridge weights of the mirror classes' residuals, and the training gems' mean excess."""
+        scale = float(self.excess.mean())
+        x = self._phi(self.points, self.margins, self.base) * (self.excess / scale)[:, None]
+        y = self.residuals[:, list(Discrepancy.CLASSES)]
+        size = np.sqrt((x**2).mean(axis=0))
+        size[size == 0] = 1.0
+        xs = x / size
+        ridge = self.penalty * len(x) * np.eye(x.shape[1])
+        ridge[0, 0] = 0.0  # the constant is not penalized
+        w = np.linalg.solve(xs.T @ xs + ridge, xs.T @ y)
+        return w / size[:, None], scale
+
+    def residual(self, params: Mapping[str, float], margins: np.ndarray, p: np.ndarray, excess: float) -> np.ndarray:
+        """(9,) float: the learned residual of a gem (see the class docstring), without the fade-out."""
+        point = np.array([GEM.complete(params)[n] for n in ("a", "b", "c", "d", "e")], dtype=float)
+        w, scale = self._weights
+        r5 = (excess / scale) * (self._phi(point[None], np.atleast_2d(margins), np.atleast_2d(p)) @ w)[0]
+        return r5[_CLASS_OF_FACE]
+
+    def covers(self, params: Mapping[str, float], margins: np.ndarray) -> bool:
+        """Whether :meth:`correct` applies: inside the box, every face with a positive margin."""
+        point = np.array([GEM.complete(params)[n] for n in ("a", "b", "c", "d", "e")], dtype=float)
+        return bool(np.all(point >= self.lower) and np.all(point <= self.upper) and np.min(margins) > 0)
+
+    def correct(self, p: np.ndarray, params: Mapping[str, float], margins: np.ndarray, excess: float) -> np.ndarray:
+        """Probabilities `p` (the fast model without this layer) plus the learned residual, renormalized."""
+        # no extrapolation beyond the bodies learned from; a body no further out than the solid gets nothing
+        excess = float(np.clip(excess, 0.0, self.excess.max()))
+        if excess == 0 or not self.covers(params, margins):
+            return p
+        weight = float(np.clip(np.min(margins) / self.margins.min(), 0.0, 1.0))
+        out = np.clip(p + weight * self.residual(params, margins, p, excess), 0, None)
+        out[np.asarray(margins) < 0] = 0.0
+        total = out.sum()
+        return out / total if total > 0 else p
+
+
+def fill_discrepancy(kind: str) -> FillCorrection | None:
+    """The gem correction learned in the fill `kind` (:class:`FillCorrection`); None for a fill without one.
+
+    ``paper``, ``print`` and ``shell`` each have their own, learned at the
+    fill's default settings (``info["fill"]``) and applied, in proportion to
+    the body's inertia excess, at any settings of that fill.
+    """
+    return _packaged_layer(kind) if kind in FILL_LAYERS else None
 
 
 @cache
-def _packaged_layer(learned: str) -> Discrepancy | None:
-    path = resources.files("diefab").joinpath("data", fill_discrepancy_file(learned))
-    return Discrepancy.from_json(path.read_text()) if path.is_file() else None
+def _packaged_layer(kind: str) -> FillCorrection | None:
+    path = resources.files("diefab").joinpath("data", fill_discrepancy_file(kind))
+    return FillCorrection.from_json(path.read_text()) if path.is_file() else None
 
 
 def calibrate(

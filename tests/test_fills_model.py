@@ -12,7 +12,6 @@ from diefab.errors import DesignError
 from diefab.fastmodel import (
     Discrepancy,
     fast_model,
-    fill_discrepancy,
     landing_probabilities,
     roll_retention,
 )
@@ -61,14 +60,6 @@ def test_fast_model_solid_fill_and_solid_inertia_change_nothing():
     assert "fast" in FILL_MODELS and "solid-angle" not in FILL_MODELS
     # a model without fill keywords sees the centre alone
     assert np.allclose(model_probabilities("solid-angle", d.polyhedron, body, Fill("shell")).sum(), 1.0)
-
-
-def test_card_fills_share_the_thin_shells_correction_and_print_has_none():
-    shell = fill_discrepancy("shell")
-    assert shell is not None and fill_discrepancy("paper") is shell
-    assert fill_discrepancy("solid") is None and fill_discrepancy("print") is None
-    assert shell.info["fill"]["kind"] == "shell" and shell.info["designs"] >= 20
-    assert shell.margins.min() > 0
 
 
 def test_the_shell_correction_keeps_mirror_images_equal_and_sums_to_one():

@@ -1,0 +1,268 @@
+"""Simulate random gems made in a fill (paper, print or shell) and learn that fill's correction of the fast model.
+
+One command per fill.  It draws ``--designs`` random stable gems with design
+seed ``--seed`` (:func:`bench_fastmodel.iter_random_designs`: uniform in the
+family box, at the fill's default settings: 160 g/m² card with the glue tabs
+of the net ``diefab net`` lays out, or the default print), drops each
+``--drops`` times in pybullet (default physics, physics seed
+``--physics-seed``) and keeps the counts, with the body each gem was
+simulated with, in ``benchmarks/results/fastmodel.json`` (written atomically
+after every gem: an interrupted run loses at most the gem in flight, and a
+rerun simulates only what is missing).  ``--extra-set NAME`` adds gems
+already simulated in that fill at its current default settings under that
+set name (for example the shell gems of ``bench_fastmodel.py --fill shell
+--test-seed 404``).
+
+It then learns :class:`diefab.fastmodel.FillCorrection` from them: the
+simulated frequencies minus the fast model without the fill's layer, as a
+ridge-regularized linear function of the coordinates, proportional to the
+body's inertia excess.  The coordinates and the penalty are chosen by 5-fold
+cross-validation over gems (the least mean held-out TVD; within 1 % of it, the
+simpler coordinates and the larger penalty), and the result is written to
+``diefab/data/gem-discrepancy-FILL.json``.
+
+Before learning, the bodies of a few training gems are rebuilt with the
+current code and compared with the recorded ones: if the body model has
+changed since the gems were simulated (a new net layout moves the glue
+tabs), the counts no longer describe these dice and the script stops.
+
+Usage::
+
+    nice -n 10 python benchmarks/learn_fill_correction.py --fill paper --seed 607 --designs 30 --drops 1000 \\
+        --extra-set train-paper-606 --workers 1
+    nice -n 10 python benchmarks/learn_fill_correction.py --fill print --seed 606 --designs 27 --drops 1000 \\
+        --extra-set train-print --workers 1
+    python benchmarks/learn_fill_correction.py --fill shell --designs 0 --extra-set test-404-shell
+
+(the packaged corrections; ``train-paper-606`` holds 61 paper gems simulated
+with the former, asymmetric tab layout, ``train-print`` 26 printed gems of
+design seed 404 at 2,000-5,000 drops).
+
+Measure the result on gems of another seed with ``bench_fastmodel.py --fill FILL --test-seed 707``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from dataclasses import replace
+from itertools import islice
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench_fastmodel import (  # noqa: E402
+    DISCREPANCY,
+    FOLDS,
+    MIN_MARGIN,
+    iter_random_designs,
+    load_cache,
+    noise_floor,
+    physics_version,
+    simulated,
+)
+
+from diefab.stats import tvd  # noqa: E402
+
+#: Ridge penalties the cross-validation chooses from (per training gem, on standardized coordinates).
+PENALTIES = (1e-3, 1e-2, 3e-2, 1e-1, 0.3, 1.0, 10.0)
+#: Recorded bodies rebuilt to check that the body model has not changed since they were simulated.
+BODY_CHECKS = 3
+#: How far a rebuilt body may lie from the recorded one (model units, and model units² for the inertia).
+BODY_TOLERANCE = 1e-6
+
+
+def fail(message: str) -> None:
+    """One line on stderr and exit status 2."""
+    print(message, file=sys.stderr)
+    raise SystemExit(2)
+
+
+class FillData:
+    """Training gems of one fill: what the correction is learned from."""
+
+    def __init__(self, kind: str, designs: list, runs: list[dict]):
+        from diefab.fastmodel import DISCREPANCY_AT, body_excess, made_gem_base
+        from diefab.geometry import face_margins
+
+        self.kind, self.designs, self.runs = kind, designs, runs
+        self.points = np.array([[d.params[n] for n in "abcde"] for d in designs])
+        counts = np.array([r["face_counts"] for r in runs], dtype=float)
+        self.q = counts / counts.sum(axis=1, keepdims=True)
+        self.drops = counts.sum(axis=1)
+        margins, excess = [], []
+        self.base = {at: [] for at in DISCREPANCY_AT}  # the base model, by where it takes the solid discrepancy
+        for d, r in zip(designs, runs):
+            center, inertia = np.array(r["body"]["center"]), np.array(r["body"]["inertia"])
+            margins.append(face_margins(d.polyhedron, center))
+            excess.append(body_excess(d.polyhedron, inertia))
+            for at, out in self.base.items():
+                out.append(made_gem_base(d.polyhedron, center, inertia, d.params, margins[-1], at))
+        self.base = {at: np.array(v) for at, v in self.base.items()}
+        self.margins, self.excess = np.array(margins), np.array(excess)
+
+    def learn(self, discrepancy_at: str = "body", **kw):
+        from diefab.fastmodel import FillCorrection
+
+        base = self.base[discrepancy_at]
+        return FillCorrection.learn(self.kind, self.points, self.margins, base, self.excess, self.q,
+                                    discrepancy_at=discrepancy_at, **kw)  # fmt: skip
+
+    def cross_validate(self, discrepancy_at: str = "body", **kw) -> np.ndarray:
+        """(n,) held-out TVD of every gem, 5-fold (fixed folds), each fold learned from the others with `kw`."""
+        from diefab.fastmodel import FillCorrection
+
+        n = len(self.designs)
+        base = self.base[discrepancy_at]
+        folds = np.random.default_rng(0).permutation(n) % FOLDS
+        err = np.empty(n)
+        for k in range(FOLDS):
+            train = folds != k
+            fit = FillCorrection.learn(self.kind, self.points[train], self.margins[train], base[train],
+                                       self.excess[train], self.q[train], **kw)  # fmt: skip
+            for i in np.flatnonzero(~train):
+                params = dict(zip("abcde", self.points[i]))
+                err[i] = tvd(fit.correct(base[i], params, self.margins[i], self.excess[i]), self.q[i])
+        return err
+
+
+def check_bodies(designs: list, runs: list[dict], k: int = BODY_CHECKS) -> None:
+    """Stop when the current code builds other bodies than the recorded ones (the counts would be stale)."""
+    for d, r in list(zip(designs, runs))[:k]:
+        body = d.mass_properties()
+        center, inertia = np.array(r["body"]["center"]), np.array(r["body"]["inertia"])
+        moved = max(np.abs(body.center - center).max(), np.abs(body.inertia / body.mass - inertia).max())
+        if moved > BODY_TOLERANCE:
+            fail(f"learn_fill_correction: the {d.fill.kind} body of gem {dict(d.params)} is not the one it "
+                     f"was simulated with (off by {moved:.2g}): the body model has changed; simulate again "
+                     "(a new --seed) before learning")  # fmt: skip
+
+
+def cached_set(name: str, kind: str, cache: dict) -> tuple[list, list[dict]]:
+    """The gems of set `name` simulated in fill `kind` at its current default settings, with their bodies."""
+    from bench_fastmodel import MADE, body_record
+
+    from diefab.design import load_design
+    from diefab.geometry import face_margins
+    from diefab.mass import Fill
+
+    fill = Fill(kind=kind)
+    label = json.dumps(fill.to_mapping(), sort_keys=True) if kind in MADE else kind
+    base = replace(load_design("fudge-gem"), fill=fill)
+    designs, runs = [], []
+    for r in sorted(cache.values(), key=lambda r: r["index"]):
+        if r["set"] != name or r.get("fill", "solid") != label or r["physics"] != physics_version():
+            continue
+        d = base.with_params(**r["params"])
+        if "body" not in r:  # simulated before bodies were recorded: this one (the check below compares others)
+            r = {**r, "body": body_record(d)}
+        if face_margins(d.polyhedron, np.array(r["body"]["center"])).min() <= 0:
+            continue
+        designs.append(d)
+        runs.append(r)
+    if not designs:
+        fail(f"learn_fill_correction: no {kind} gems of set {name!r} in the cache")
+    return designs, runs
+
+
+def choose(data: FillData) -> tuple[dict, dict]:
+    """Base, coordinates and penalty by cross-validation; returns the choice and every score."""
+    from diefab.fastmodel import DISCREPANCY_AT, FILL_COORDINATES
+
+    scores = {}
+    for at in DISCREPANCY_AT:
+        for coordinates in FILL_COORDINATES:
+            for penalty in PENALTIES:
+                err = data.cross_validate(discrepancy_at=at, coordinates=coordinates, penalty=penalty)
+                score = scores[at, coordinates, penalty] = (float(np.median(err)), float(err.mean()))
+                print(f"  discrepancy at {at:<5} {coordinates:<9} penalty {penalty:<6g} {FOLDS}-fold CV TVD "
+                      f"median {score[0]:.4f} mean {score[1]:.4f}", file=sys.stderr, flush=True)  # fmt: skip
+    least = min(v[1] for v in scores.values())
+    simple = {c: i for i, c in enumerate(FILL_COORDINATES)}
+    at, coordinates, penalty = min((k for k, v in scores.items() if v[1] <= 1.01 * least),
+                                   key=lambda k: (simple[k[1]], -k[2], k[0] != "body"))  # fmt: skip
+    return {"discrepancy_at": at, "coordinates": coordinates, "penalty": penalty}, scores
+
+
+def main(argv=None) -> None:
+    from diefab import fastmodel
+    from diefab.files import atomic_write
+    from diefab.mass import Fill
+    from diefab.physics import PhysicsSettings
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--fill", choices=fastmodel.FILL_LAYERS, required=True)
+    ap.add_argument("--seed", type=int, default=606, help="design seed of the training gems")
+    ap.add_argument("--designs", type=int, default=120, help="training gems to draw and simulate")
+    ap.add_argument("--drops", type=int, default=1000, help="drops per training gem")
+    ap.add_argument("--physics-seed", type=int, default=0)
+    ap.add_argument("--workers", type=int, default=1)
+    ap.add_argument("--extra-set", action="append", default=[], metavar="NAME",
+                    help="also learn from the gems cached under this set name (same fill and settings, "
+                         "with the bodies they were simulated with)")  # fmt: skip
+    ap.add_argument("--collect-only", action="store_true", help="simulate and stop")
+    ap.add_argument("--cache", type=Path, default=None, help="counts file (default benchmarks/results/fastmodel.json)")
+    args = ap.parse_args(argv)
+    if args.cache is not None:
+        import bench_fastmodel
+
+        bench_fastmodel.RESULTS = args.cache
+    if args.designs < 0 or args.drops < 1:
+        ap.error("--designs must be >= 0 and --drops >= 1")
+
+    cache = load_cache()
+    name = f"train-{args.fill}-{args.seed}"
+    drawn = islice(iter_random_designs(args.seed, args.fill), args.designs)
+    designs, runs = simulated(drawn, args.drops, args.physics_seed, name, cache, args.workers, args.designs)
+    checked = len(designs) or None  # the drawn gems come first
+    for extra in args.extra_set:
+        d, r = cached_set(extra, args.fill, cache)
+        designs, runs = designs + d, runs + r
+    if args.collect_only:
+        return
+    if len(designs) < 2 * FOLDS:
+        fail(f"learn_fill_correction: {len(designs)} gems are too few to cross-validate; give --designs or "
+                 "--extra-set")  # fmt: skip
+    # the gems this command draws (or the first extra set) must still be what the code builds; extra sets
+    # are taken with the bodies they were simulated with, which the correction takes as inputs
+    check_bodies(designs[:checked], runs[:checked])
+
+    data = FillData(args.fill, designs, runs)
+    print(f"{len(designs)} {args.fill} gems, {int(data.drops.sum())} drops (median {int(np.median(data.drops))} "
+          f"per gem; sampling noise alone ~{np.median(noise_floor(data.q, data.drops)):.4f} TVD per gem)")  # fmt: skip
+    choice, scores = choose(data)
+    before = np.array([tvd(p, q) for p, q in zip(data.base[choice["discrepancy_at"]], data.q)])
+    info = {
+        "fill": Fill(kind=args.fill).to_mapping(),
+        "designs": len(designs),
+        "design_seed": args.seed if args.designs else None,
+        "extra_sets": args.extra_set,
+        "min_margin": MIN_MARGIN,
+        "drops": int(np.median(data.drops)),
+        "total_drops": int(data.drops.sum()),
+        "seed": args.physics_seed,
+        "physics": physics_version(),
+        "settings": PhysicsSettings().as_dict(),
+        "bodies": [{"params": dict(d.params), **r["body"]} for d, r in list(zip(designs, runs))[:BODY_CHECKS]],
+        "on_top_of": "fast model without this layer (chain with the body's inertia + gem discrepancy)",
+        "before_median_tvd": round(float(np.median(before)), 5),
+        "cv": {
+            f"{a} {c} {p:g}": {"median_tvd": round(v[0], 5), "mean_tvd": round(v[1], 5)}
+            for (a, c, p), v in scores.items()
+        },
+    }
+    fit = data.learn(**choice, info=info)
+    out = DISCREPANCY / fastmodel.fill_discrepancy_file(args.fill)
+    atomic_write(out, fit.to_json())
+    median, mean = scores[choice["discrepancy_at"], choice["coordinates"], choice["penalty"]]
+    print(f"learned the {args.fill} correction: solid discrepancy at the {choice['discrepancy_at']}, "
+          f"{choice['coordinates']} coordinates, penalty {choice['penalty']:g}; "
+          f"{FOLDS}-fold CV TVD median {median:.4f} mean {mean:.4f} (without it {np.median(before):.4f} "
+          f"mean {before.mean():.4f}); wrote {out.relative_to(DISCREPANCY.parents[1])}")  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
