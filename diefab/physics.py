@@ -432,9 +432,9 @@ def _worker_start(parent: int) -> None:
     """
     from .world import worker_signals
 
+    worker_signals()  # before the signals held back while the parent forked arrive, not after
     if hasattr(signal, "pthread_sigmask"):
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, _STOP_SIGNALS)  # held back while the parent forked
-    worker_signals()
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, _STOP_SIGNALS)
     if not _die_with_parent() or os.getppid() != parent:  # no prctl, or the parent is already gone
         import threading
 
