@@ -404,6 +404,8 @@ def _pool(workers: int):
     return _POOL
 
 
+#: Seconds the parent waits on its workers at a time before it looks for a stop signal.
+SIGNAL_POLL = 0.25
 _STOP_SIGNALS = {getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)}
 
 
@@ -669,7 +671,9 @@ def simulate(
             pool = _pool(workers)
             pending = {pool.submit(run_batch, body, settings, seed, a, b): (a, b) for a, b in batches}
             while pending:
-                ready, _ = wait(pending, return_when=FIRST_COMPLETED)
+                # a timeout brings the main thread back to Python now and then, to run a signal handler
+                # whose signal the kernel gave to another thread (a progress bar's, say)
+                ready, _ = wait(pending, timeout=SIGNAL_POLL, return_when=FIRST_COMPLETED)
                 for future in ready:
                     finished(*pending.pop(future), future.result())
     except KeyboardInterrupt:

@@ -468,6 +468,11 @@ def _alive(pid: int) -> bool:
     return "zombie" not in status
 
 
+def _hangups_heard() -> None:
+    """In the child: hang-ups at their default, as in a terminal (under nohup they arrive ignored, and stay so)."""
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
+
+
 SIM = ["optimize", "fudge-gem", "--model", "simulation", "--start", "design", "--sims-per-eval", "200000"]
 
 
@@ -487,7 +492,7 @@ SIM = ["optimize", "fudge-gem", "--model", "simulation", "--start", "design", "-
 def test_workers_die_with_their_parent(tmp_path, args, signum, delay):
     proc = subprocess.Popen([sys.executable, "-m", "diefab", *args, *(["--out", str(tmp_path)] if args[0] ==
                              "optimize" else [])], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            cwd=tmp_path)  # fmt: skip
+                            cwd=tmp_path, preexec_fn=_hangups_heard)  # fmt: skip
     children: set[int] = set()
     deadline = time.monotonic() + 90
     try:
@@ -512,7 +517,7 @@ def test_workers_die_with_their_parent(tmp_path, args, signum, delay):
         for pid in [proc.pid, *children]:
             if _alive(pid):
                 os.kill(pid, signal.SIGKILL)
-        proc.wait(timeout=10)
+        proc.communicate(timeout=10)  # reaps it and closes its pipes, even after a timed-out communicate
 
 
 # ----------------------------------------------------------------------
