@@ -462,7 +462,7 @@ def _section_areas(poly: Polyhedron, up: np.ndarray, heights: np.ndarray) -> np.
 
 def tab_polygons(poly: Polyhedron, tabs: tuple[TabShape, ...], mm_per_unit: float) -> np.ndarray:
     """(n, 4, 3) float, model units: each tab glued flat on its face's plane (base on the edge first)."""
-    from .fabricate.unfold import TAB_MAX_FRACTION, TAB_TOP_FRACTION
+    from .fabricate.tabs import TAB_MAX_FRACTION, TAB_TOP_FRACTION
 
     out = np.empty((len(tabs), 4, 3))
     for i, t in enumerate(tabs):
