@@ -58,7 +58,7 @@ from .. import tolerances as tol
 from ..design import Design
 from ..errors import FabricationError
 from ..geometry import Polyhedron
-from ..mass import Fill, inset
+from ..mass import Fill, bed_face, inset
 from .engrave import Label, Labelling, checked, cut_labels, cutter, label_faces, stroke_warnings
 from .formats import inlay_stl_bytes, stl_bytes, threemf_bytes
 from .labels import small_die_warning
@@ -193,29 +193,6 @@ def flat_face_probabilities(flat_faces: list[np.ndarray | None], center: np.ndar
     """
     omega = np.array([0.0 if f is None else _polygon_solid_angle(f, center) for f in flat_faces])
     return omega / omega.sum()
-
-
-def bed_face(poly: Polyhedron, overhang_deg: float = 45.0, *, avoid=(), strict: bool = False) -> int:
-    """The face to print on: least overhanging area, then a face not in `avoid`, then the largest.
-
-    With face k on the bed, a face whose outward normal is within
-    `overhang_deg` of straight down (other than face k) needs support; its
-    area counts as overhang.  `avoid` lists faces that carry a label: text on
-    the bed face prints poorly, and raised text would stand the print on its
-    letters.  With `strict`, any face outside `avoid` beats every face in it,
-    whatever the overhang (embossed labels); when all faces are in `avoid`
-    the usual choice stands and the caller engraves that face's label.
-    """
-    limit = math.cos(math.radians(overhang_deg))
-    down = poly.normals @ poly.normals.T  # [k, j]: cos between face j's normal and "down" when k is on the bed
-    overhang = np.where((down > limit + tol.TIE) & ~np.eye(len(poly.faces), dtype=bool), poly.areas[None, :], 0.0)
-    cost = overhang.sum(axis=1)
-    labelled = np.isin(np.arange(len(poly.faces)), list(avoid))
-    pool = np.flatnonzero(~labelled) if strict and not labelled.all() else np.arange(len(poly.faces))
-    best = pool[cost[pool] <= cost[pool].min() + tol.AREA]
-    if not labelled[best].all():
-        best = best[~labelled[best]]
-    return int(best[np.argmax(poly.areas[best])])
 
 
 def _rotation_to_down(normal: np.ndarray) -> np.ndarray:

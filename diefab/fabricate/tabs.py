@@ -19,16 +19,13 @@ import numpy as np
 
 from .. import tolerances as tol
 from ..geometry import Polyhedron
+from ..mass import TAB_MAX_FRACTION, TAB_TOP_FRACTION
 from .flat import overlap
 from .symmetry import Symmetries, off_axis
 from .trees import edge_key, edge_lookup, face_ring
 
 #: Default glue-tab width, mm.
 TAB_WIDTH = 5.0
-#: A tab is never wider than this fraction of its edge ("about half the edge").
-TAB_MAX_FRACTION = 0.45
-#: The tab's outer side keeps at least this fraction of the edge length.
-TAB_TOP_FRACTION = 0.1
 #: Narrowest tab worth gluing, mm (edges shorter than ~3 mm may take narrower tabs,
 #: down to 0.3 of their length).
 TAB_MIN_WIDTH = 1.0
