@@ -1,6 +1,6 @@
 """Leave-one-die-out prediction of real dice: default physics, calibrated physics, models, the source's own.
 
-    nice -n 10 python benchmarks/bench_calibrate.py --workers 1    # the full run (about 30 minutes, 2 busy cores)
+    nice -n 10 python benchmarks/bench_calibrate.py --workers 1    # the full run (about 10 minutes, 2 busy cores)
     python benchmarks/bench_calibrate.py --drops 200 --candidates 3 --slow-drops 60 --predict-drops 200  # a quick one
 
 The dice: the paper's die as made (the gem a=1.18 b=0.52 c=0.72 d=1.41 as
@@ -31,7 +31,7 @@ Calibration, affordable on a shared 2-core machine:
    material (:data:`MATERIAL`: what it is made of and what it was rolled
    on), and a die whose material no other die shares gets the defaults:
    a calibration carries over to a die of the same material, not across.
-   Each fit is then refined (``--refine`` rounds, default 2): its training
+   With ``--refine R`` each fit is then refined in R rounds: its training
    dice are dropped at the fitted setting (``--refine-drops``, the
    candidates' seed), that point joins their surfaces (the fit's own copies,
    so the folds stay independent) and the fit is repeated: a quadratic
@@ -203,7 +203,7 @@ def main() -> int:
     parser.add_argument(
         "--refine",
         type=int,
-        default=2,
+        default=0,
         help="refinement rounds: drop the training dice at each fit and refit their surfaces",
     )
     parser.add_argument(
