@@ -14,8 +14,9 @@ Calibration, affordable on a shared 2-core machine:
 
 1. Every die is dropped at the same candidate settings: the defaults and
    ``--candidates`` scrambled Sobol points in the box of the settings
-   ``--free`` names (default restitution, friction, rolling friction, spin
-   and drop height, over the ranges ``diefab calibrate`` searches), with
+   ``--free`` names (default restitution, friction, rolling friction, spin,
+   drop height and the quasi-static capture, over the ranges and scales
+   ``diefab calibrate`` searches), with
    common random numbers (one seed; ``--drops`` drops per die and candidate,
    ``--slow-drops`` for dice of more than 50 hull faces, whose drops cost
    several times more).
