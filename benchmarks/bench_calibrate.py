@@ -1,6 +1,6 @@
 """Leave-one-die-out prediction of real dice: default physics, calibrated physics, models, the source's own.
 
-    nice -n 10 python benchmarks/bench_calibrate.py --workers 1    # the full run (about 30 minutes, 2 busy cores)
+    nice -n 10 python benchmarks/bench_calibrate.py --workers 1    # the full run (about 10 minutes, 2 busy cores)
     python benchmarks/bench_calibrate.py --drops 200 --candidates 3 --slow-drops 60 --predict-drops 200  # a quick one
 
 The dice: the paper's die as made (the gem a=1.18 b=0.52 c=0.72 d=1.41 as
@@ -14,8 +14,9 @@ Calibration, affordable on a shared 2-core machine:
 
 1. Every die is dropped at the same candidate settings: the defaults and
    ``--candidates`` scrambled Sobol points in the box of the settings
-   ``--free`` names (default restitution, friction, rolling friction, spin
-   and drop height, over the ranges ``diefab calibrate`` searches), with
+   ``--free`` names (default restitution, friction, rolling friction, spin,
+   drop height and the quasi-static capture, over the ranges and scales
+   ``diefab calibrate`` searches), with
    common random numbers (one seed; ``--drops`` drops per die and candidate,
    ``--slow-drops`` for dice of more than 50 hull faces, whose drops cost
    several times more).
@@ -31,6 +32,12 @@ Calibration, affordable on a shared 2-core machine:
    material (:data:`MATERIAL`: what it is made of and what it was rolled
    on), and a die whose material no other die shares gets the defaults:
    a calibration carries over to a die of the same material, not across.
+   With ``--refine R`` each fit is then refined in R rounds: its training
+   dice are dropped at the fitted setting (``--refine-drops``, the
+   candidates' seed), that point joins their surfaces (the fit's own copies,
+   so the folds stay independent) and the fit is repeated: a quadratic
+   surface is least accurate where the response is sharp, and the fit lands
+   just there.  The held-out die is never dropped in fitting.
 4. The held-out die is then dropped afresh at its calibrated setting
    (``--predict-drops`` drops, seed ``--predict-seed``, never used in
    fitting), and so is every die at the default physics.
@@ -78,7 +85,7 @@ from diefab.realrolls import grouped_tvd as grouped
 
 HERE = Path(__file__).parent
 TABLE_2 = np.array([0, 20, 48, 80, 89, 83, 66, 17, 2])  # the paper's real rolls, values -4..4
-FREE = ("restitution", "friction", "rolling_friction", "spin", "drop_height")
+FREE = ("restitution", "friction", "rolling_friction", "spin", "drop_height", "capture")
 #: What each die is made of and what it was rolled on: a calibration carries over only within one material.
 MATERIAL = {"paper-gem": "paper model on the paper's table", "binom3_stone": "printed, on stone"}
 PRINTED = "printed, on the source's table"
@@ -138,41 +145,74 @@ def model_probabilities(die: RealDie, model: str) -> np.ndarray | None:
         return None
 
 
+#: The free settings whose values a cache line without "settings" holds, by their number.
+UNNAMED_VALUES = {4: ("restitution", "friction", "spin", "drop_height"), 5: FREE[:5]}
+
+
+def settings_key(settings) -> str:
+    """The physics settings of a simulation as canonical JSON (settings at their off value left out)."""
+    return json.dumps(settings.as_dict(), sort_keys=True)
+
+
 class Simulations:
-    """Simulated value counts of the dice, cached by design, setting, drop count and seed."""
+    """Simulated value counts of the dice, cached by design, physics settings, drop count and seed."""
 
     def __init__(self, path: Path, workers: int) -> None:
+        from diefab.calibrate import settings_at
+        from diefab.physics import PhysicsSettings
+
         self.path, self.workers, self.table, self.dropped, self.seconds = path, workers, {}, 0, 0.0
         if path.is_file():
             for line in path.read_text().splitlines():
                 try:
                     r = json.loads(line)
-                    self.table[(r["design"], tuple(r["values"]), r["drops"], r["seed"])] = r["counts"]
-                except (ValueError, KeyError):
+                    if "settings" in r:
+                        key = settings_key(PhysicsSettings.from_mapping(r["settings"]))
+                    else:
+                        key = settings_key(settings_at(PhysicsSettings(), UNNAMED_VALUES[len(r["values"])],
+                                                       r["values"]))  # fmt: skip
+                    self.table[(r["design"], key, r["drops"], r["seed"])] = r["counts"]
+                except (ValueError, KeyError, DiefabError):
                     continue
         path.parent.mkdir(parents=True, exist_ok=True)
 
     def counts(self, die: RealDie, spec, x: np.ndarray, drops: int, seed: int) -> np.ndarray:
-        values = tuple(round(float(v), 9) for v in spec.values(x))
-        key = (fingerprint(die), values, int(drops), int(seed))
+        from diefab.calibrate import settings_at
+
+        values = [round(float(v), 9) for v in spec.values(x)]
+        settings = settings_at(spec.base, spec.names, values)
+        key = (fingerprint(die), settings_key(settings), int(drops), int(seed))
         if key not in self.table:
-            r = simulate_die(die, spec.settings(x), int(drops), int(seed), self.workers)
+            r = simulate_die(die, settings, int(drops), int(seed), self.workers)
             self.table[key] = r["counts"]
             self.dropped += int(drops)
             self.seconds += r["seconds"]
             with self.path.open("a") as log:
-                log.write(json.dumps({"die": die.name, "design": key[0], "values": list(values), "drops": key[2],
-                                      "seed": key[3], "counts": r["counts"]}) + "\n")  # fmt: skip
+                log.write(json.dumps({"die": die.name, "design": key[0], "values": values, "drops": key[2],
+                                      "seed": key[3], "settings": settings.as_dict(), "counts": r["counts"]})
+                          + "\n")  # fmt: skip
         return np.array(self.table[key], dtype=float)
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--drops", type=int, default=300, help="drops per die and candidate")
+    parser.add_argument("--drops", type=int, default=100, help="drops per die and candidate")
     parser.add_argument("--slow-drops", type=int, default=60, help=f"the same, dice of more than {SLOW_FACES} faces")
-    parser.add_argument("--candidates", type=int, default=24, help="Sobol candidates besides the defaults")
+    parser.add_argument("--candidates", type=int, default=64, help="Sobol candidates besides the defaults")
     parser.add_argument("--prior", type=float, default=0.25,
                         help="prior sd toward the defaults, in parameter ranges (inf: none)")  # fmt: skip
+    parser.add_argument(
+        "--refine",
+        type=int,
+        default=0,
+        help="refinement rounds: drop the training dice at each fit and refit their surfaces",
+    )
+    parser.add_argument(
+        "--refine-drops",
+        type=int,
+        default=400,
+        help="drops of a training die per refinement round (fewer for slow dice, as --slow-drops)",
+    )
     parser.add_argument("--predict-drops", type=int, default=2000, help="fresh drops of each prediction")
     parser.add_argument("--seed", type=int, default=0, help="physics seed of the candidates (common random numbers)")
     parser.add_argument("--predict-seed", type=int, default=1, help="physics seed of the predictions")
@@ -194,10 +234,12 @@ def main() -> int:
     xs = np.vstack([x0, points])
     faces = [len(d.design.polyhedron.names) for d in dice]
     drops = [args.slow_drops if f > SLOW_FACES else args.drops for f in faces]
+    refine_drops = [args.refine_drops * d // args.drops for d in drops]  # the same ratio for slow dice
     print(f"{len(dice)} dice, {len(xs)} candidates (defaults + {args.candidates} Sobol points in "
           f"{', '.join(f'{n} [{lo:g}, {hi:g}]' for n, (lo, hi) in zip(free, spec.bounds))}); "
           f"{args.drops} drops per die and candidate ({args.slow_drops} for dice of more than {SLOW_FACES} faces), "
-          f"seed {args.seed}; predictions {args.predict_drops} drops, seed {args.predict_seed}; prior sd "
+          f"seed {args.seed}; {args.refine} refinement rounds of {args.refine_drops} drops; "
+          f"predictions {args.predict_drops} drops, seed {args.predict_seed}; prior sd "
           f"{args.prior:g} of each range; {args.workers} workers", flush=True)  # fmt: skip
 
     sims = Simulations(args.cache, args.workers)
@@ -224,21 +266,32 @@ def main() -> int:
     dev = np.array([[deviance(d.counts, d.symmetrized(smoothed(counts[i][j]))) for j in range(len(xs))]
                     for i, d in enumerate(dice)])  # fmt: skip
 
-    def calibrate(train: list[int], sigma: float) -> np.ndarray:
+    def calibrate(train: list[int], sigma: float, rounds: int = 0) -> np.ndarray:
+        """The fit on the `train` dice; each refinement round drops them at the fit and refits their surfaces."""
         order = np.argsort(dev[train].sum(axis=0))[:3]
-        x, _ = fit_settings([dice[i] for i in train], [surfaces[i] for i in train], x0, sigma=sigma,
-                            starts=[xs[j] for j in order])  # fmt: skip
+        starts = [xs[j] for j in order]
+        local = {i: (xs, counts[i], surfaces[i]) for i in train}  # this fit's own copies: folds stay independent
+        x, _ = fit_settings([dice[i] for i in train], [surfaces[i] for i in train], x0, sigma=sigma, starts=starts)
+        for _ in range(rounds):
+            for i in train:
+                pts, c, _s = local[i]
+                more = sims.counts(dice[i], spec, x, refine_drops[i], args.seed)
+                pts, c = np.vstack([pts, x]), np.vstack([c, more])
+                local[i] = (pts, c, fit_surface(pts, c, cross=surfaces[i].cross))
+            x, _ = fit_settings([dice[i] for i in train], [local[i][2] for i in train], x0, sigma=sigma,
+                                starts=[x, *starts])  # fmt: skip
         return x
 
     everyone = list(range(len(dice)))
-    x_all = calibrate(everyone, args.prior)
+    x_all = calibrate(everyone, args.prior, args.refine)
     rows, fitted = [], []
     for i, die in enumerate(dice):
         train = [j for j in everyone if j != i]
-        x_loo = calibrate(train, args.prior)
+        x_loo = calibrate(train, args.prior, args.refine)
         x_noprior = calibrate(train, np.inf)
         same = [j for j in train if materials[j] == materials[i]]
-        x_mat = calibrate(same, args.prior) if same else x0  # no die of its material: nothing to carry over
+        # no die of its material: nothing to carry over
+        x_mat = calibrate(same, args.prior, args.refine) if same else x0
         pick = int(np.argmin(dev[train].sum(axis=0)))
         fitted.append(x_loo)
 
@@ -322,8 +375,8 @@ def main() -> int:
         grid = np.linspace(0, 1, 21)
         vals = [total(np.where(np.arange(len(free)) == k, g, x_all)) for g in grid]
         leans[name] = float(max(vals) - base)
-        lo, hi = spec.bounds[k]
-        print(f"  {name:<12} up to +{leans[name]:.1f} (least at {lo + grid[int(np.argmin(vals))] * (hi - lo):.3g})")
+        least = spec.values(np.where(np.arange(len(free)) == k, grid[int(np.argmin(vals))], x_all))[k]
+        print(f"  {name:<12} up to +{leans[name]:.1f} (least at {least:.3g})")
     if args.json is not None:
         summary = {"args": {k: str(v) for k, v in vars(args).items()}, "rows": rows, "means": means,
                    "in_sample": dict(zip(free, spec.values(x_all).tolist())), "leans": leans, "seconds": seconds,

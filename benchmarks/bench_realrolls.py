@@ -22,6 +22,7 @@ short still window (``--energy-fraction 0``: still on a resting face for
 Usage::
 
     nice -n 10 python benchmarks/bench_realrolls.py [--sims 2000] [--workers 2] [--data DIR] [--out DIR]
+        [--physics PROFILE] [--capture-energy C]    # validate under a profile / with quasi-static capture
     nice -n 10 python benchmarks/bench_realrolls.py --landing [--dice armadilo_d3,dragon_d3,kitten_d3]
 """
 
@@ -62,6 +63,8 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--landing", action="store_true", help="Compare the landing rule with a still window.")
     parser.add_argument("--dice", default="", help="Comma-separated die names (default: every die).")
+    parser.add_argument("--physics", default=None, help="Physics profile for validate (default: the defaults).")
+    parser.add_argument("--capture-energy", default=None, help="validate --capture-energy (default: off).")
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
     files = sorted(args.data.glob("*.json"))
@@ -87,8 +90,11 @@ def main() -> None:
             times[model] += seconds
             row[model] = rolls.tvd({int(k): v for k, v in data["values"].items()})
             info = {"faces": len(data["faces"]), "resting": len(data["faces"]) - len(data["transitional"])}
+        profile = ("--physics", args.physics) if args.physics else ()
+        if args.capture_energy is not None:
+            profile += ("--capture-energy", args.capture_energy)
         data, seconds = cli("validate", design, "--sims", str(args.sims), "--seed", str(args.seed),
-                            "--workers", str(args.workers))  # fmt: skip
+                            "--workers", str(args.workers), *profile)  # fmt: skip
         times["validate"] += seconds
         landed = max(data["landed"], 1)
         row["validate"] = rolls.tvd({int(k): c / landed for k, c in data["counts"].items()})
@@ -104,7 +110,10 @@ def main() -> None:
     print(f"{'mean':<13} {'':>5} {'':>5} {'':>4} " + " ".join(f"{mean[c]:>11.4f}" for c in columns))
     print(
         f"\nTVD to the real counts (ambiguous groups compared up to relabelling). validate: {args.sims} pybullet "
-        f"drops per die, seed {args.seed}, {args.workers} workers, default physics settings. noise: expected TVD of "
+        f"drops per die, seed {args.seed}, {args.workers} workers, "
+        + (f"physics profile {args.physics}" if args.physics else "default physics settings")
+        + (f", capture energy {args.capture_energy}" if args.capture_energy is not None else "")
+        + ". noise: expected TVD of "
         "the real counts to their own distribution (Monte-Carlo, 20,000 samples). ours/bullet: the source's "
         "quasi-static model and Bullet simulation, normalised."
     )

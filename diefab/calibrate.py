@@ -40,7 +40,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -82,7 +82,9 @@ class Parameter:
 
     ``setting`` is the :class:`diefab.physics.PhysicsSettings` field it
     changes; for a range (``angular_velocity``, ``linear_velocity``) the
-    parameter is the range's upper end.
+    parameter is the range's upper end.  Over the unit cube u of the search
+    the parameter is ``low + (high - low) u ** power``: a power above 1
+    spreads the search where small values already matter.
     """
 
     name: str
@@ -91,6 +93,7 @@ class Parameter:
     high: float
     unit: str
     text: str
+    power: float = 1.0
 
 
 PARAMETERS: dict[str, Parameter] = {
@@ -103,6 +106,7 @@ PARAMETERS: dict[str, Parameter] = {
         Parameter("spin", "angular_velocity", 0.0, 40.0, "rad/s", "upper end of the initial spin range"),
         Parameter("speed", "linear_velocity", 0.0, 5.0, "units/s", "upper end of the initial horizontal speed"),
         Parameter("drop_height", "drop_height", 2.0, 10.0, "units", "drop height of the centre of mass"),
+        Parameter("capture", "capture_energy", 0.0, 1.0, "m g L", "quasi-static capture energy", power=2.0),
     )
 }
 #: Fitted unless ``free`` says otherwise.
@@ -281,7 +285,6 @@ def deviance(counts: np.ndarray, p: np.ndarray) -> float:
 
 def settings_at(base, names: Sequence[str], values: Sequence[float]):
     """`base` (:class:`diefab.physics.PhysicsSettings`) with the calibration parameters `names` set to `values`."""
-    from dataclasses import replace
 
     changes: dict[str, Any] = {}
     for name, value in zip(names, values):
@@ -372,14 +375,20 @@ class CalibrationSpec:
 
         return PhysicsSettings.from_mapping(self.physics)
 
+    @property
+    def powers(self) -> np.ndarray:
+        """(d,) float: each parameter's :attr:`Parameter.power` (unit cube -> values)."""
+        return np.array([PARAMETERS[n].power for n in self.names], dtype=float)
+
     def values(self, x: Sequence[float]) -> np.ndarray:
         """Unit-cube point -> parameter values."""
         lo, hi = np.array(self.bounds).T
-        return lo + np.clip(np.asarray(x, dtype=float), 0.0, 1.0) * (hi - lo)
+        return lo + np.clip(np.asarray(x, dtype=float), 0.0, 1.0) ** self.powers * (hi - lo)
 
     def unit(self, values: Sequence[float]) -> np.ndarray:
         lo, hi = np.array(self.bounds).T
-        return (np.asarray(values, dtype=float) - lo) / (hi - lo)
+        u = (np.asarray(values, dtype=float) - lo) / (hi - lo)
+        return np.sign(u) * np.abs(u) ** (1.0 / self.powers)
 
     def settings(self, x: Sequence[float]):
         return settings_at(self.base, self.names, self.values(x))
@@ -444,13 +453,11 @@ def make_spec(
             if hi <= lo:
                 raise CalibrationError(f"drop_height bounds must reach above {lowest:.3f} (the dice's radius + jitter)")
         box.append((float(lo), float(hi)))
-    lo, hi = np.array(box).T if box else (np.zeros(0), np.zeros(0))
+    spec = CalibrationSpec(dice=tuple(d.to_json() for d in dice), names=tuple(free), bounds=tuple(box),
+                           x0=(0.0,) * len(box), physics=base.as_dict(), **options)  # fmt: skip
     start = [parameter_value(base, n) for n in free]
-    x0 = np.clip((np.array(start) - lo) / (hi - lo), 0.0, 1.0) if box else np.zeros(0)
-    return CalibrationSpec(
-        dice=tuple(d.to_json() for d in dice), names=tuple(free), bounds=tuple(box),
-        x0=tuple(float(v) for v in x0), physics=base.as_dict(), **options,
-    )  # fmt: skip
+    x0 = np.clip(spec.unit(start), 0.0, 1.0) if box else np.zeros(0)
+    return replace(spec, x0=tuple(float(v) for v in x0))
 
 
 # ----------------------------------------------------------------------
@@ -584,14 +591,17 @@ def curvature(
     h = np.zeros((d, d))
     h[iu] = coef[1 + d :]
     h = h + h.T  # the diagonal's coefficient is h_ii / 2, an off-diagonal's is h_ij
-    scale = np.diff(np.array(spec.bounds), axis=1)[:, 0]  # unit cube -> parameter units
     w, v = np.linalg.eigh(h)
     # a direction whose standard error would exceed the whole searched range is not determined
     good = w > 2.0
     for i, n in enumerate(names):
         if np.all(np.abs(v[i, ~good]) < 0.1):
-            var = 2.0 * np.sum(v[i, good] ** 2 / w[good])
-            out[n]["se"] = float(np.sqrt(var) * scale[i])
+            se = float(np.sqrt(2.0 * np.sum(v[i, good] ** 2 / w[good])))
+            # unit cube -> parameter units: half the image of x ± se (the slope, where the map is linear)
+            hi, lo = x0.copy(), x0.copy()
+            hi[i], lo[i] = min(x0[i] + se, 1.0), max(x0[i] - se, 0.0)
+            span = (spec.values(hi)[i] - spec.values(lo)[i]) / (hi[i] - lo[i]) if hi[i] > lo[i] else 0.0
+            out[n]["se"] = float(se * span)
     return out
 
 

@@ -60,6 +60,8 @@ __all__ = [
 
 #: More drops than this in one call is taken as a typo.
 MAX_DROPS = 100_000_000
+#: Settings added after the others, with the value that turns them off (the rigid simulation).
+OPT_IN = {"capture_energy": 0.0}
 
 
 def _check(name: str, value, ok: bool, expected: str) -> None:
@@ -122,6 +124,19 @@ class PhysicsSettings:
         of the basin's barrier (its lowest saddle): it can no longer leave
         f.  0 turns the rule off (``settle_time`` then decides).  The rest
         is a margin for the engine's energy errors.  In [0, 1).
+    capture_energy : float
+        Quasi-static capture, in units of ``m g L`` (mass, gravity, the die's
+        radius L: the largest distance from its centre of mass to a
+        vertex).  A die in face f's basin whose kinetic energy plus
+        potential energy above rest on f is below this has landed on f,
+        even where that is above f's barrier: a real die loses its energy
+        faster than a rigid hull on a rigid plane (plastic impacts, a table
+        that gives), so a slow die stays in the basin it is in.  One
+        threshold for all faces acts most in wide, shallow basins, which a
+        rigid hull rolls out of.  0 (the default)
+        turns it off: the rigid simulation.  Very large, every die lands in
+        the basin of its orientation at the first check after it nears the
+        ground, the quasi-static model.  In [0, 100].
     time_limit : float
         A die still moving after this many seconds is unsettled.
     face_tolerance : float
@@ -146,6 +161,7 @@ class PhysicsSettings:
     settle_time: float = 0.1
     cocked_time: float = 1.0
     energy_fraction: float = 0.95
+    capture_energy: float = 0.0
     time_limit: float = 20.0
     face_tolerance: float = 3.0
 
@@ -186,6 +202,7 @@ class PhysicsSettings:
         c("settle_time", self.settle_time, 0 <= self.settle_time <= 10, "in [0, 10] seconds")
         c("cocked_time", self.cocked_time, self.settle_time <= self.cocked_time <= 60, "in [settle_time, 60] seconds")
         c("energy_fraction", self.energy_fraction, 0 <= self.energy_fraction < 1, "in [0, 1)")
+        c("capture_energy", self.capture_energy, 0 <= self.capture_energy <= 100, "in [0, 100] (units of m g L)")
         c("time_limit", self.time_limit, self.cocked_time < self.time_limit <= 600, "in (cocked_time, 600] seconds")
         c("face_tolerance", self.face_tolerance, 0 < self.face_tolerance < 45, "in (0, 45) degrees")
 
@@ -203,8 +220,17 @@ class PhysicsSettings:
         return cls(**data)
 
     def as_dict(self) -> dict[str, Any]:
-        """The settings as a plain mapping (ranges as lists), e.g. for JSON."""
-        return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
+        """The settings as a plain mapping (ranges as lists), e.g. for JSON.
+
+        An opt-in setting (:data:`OPT_IN`) at its off value is left out, so
+        the mapping of settings that do not use it is the same as before it
+        existed (stored runs and caches compare these mappings).
+        """
+        return {
+            k: list(v) if isinstance(v, tuple) else v
+            for k, v in asdict(self).items()
+            if not (k in OPT_IN and v == OPT_IN[k])
+        }
 
 
 # ----------------------------------------------------------------------

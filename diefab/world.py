@@ -392,7 +392,7 @@ class World:
             step(physicsClientId=cid)
 
     # -- the fast path -----------------------------------------------
-    def run(self, states: np.ndarray, *, early: bool = True) -> np.ndarray:
+    def run(self, states: np.ndarray, *, early: bool = True, with_steps: bool = False):
         """Drop the dice of `states` ((k, 13)) and return their (k,) outcome codes.
 
         Each drop first falls freely (:func:`fly`, no engine needed) until it
@@ -407,8 +407,12 @@ class World:
         face, it is cocked; it is unsettled at ``settings.time_limit``.
         Without the energy rule (`early` False or ``energy_fraction`` 0) a
         die still for ``settings.settle_time`` on a face it can rest on has
-        landed.  `early` False turns off the free-fall
-        shortcut and the energy rule (the die then runs until still).
+        landed.  The quasi-static capture (``settings.capture_energy``)
+        raises the energy below which a die in a basin has landed there.
+        `early` False turns off the free-fall shortcut, the energy rule and
+        the capture (the die then runs until still).
+        `with_steps` True also returns the (k,) int engine steps after which
+        each drop ended (counting the free fall).
         """
         s, body = self.settings, self.body
         n = len(states)
@@ -417,6 +421,7 @@ class World:
         else:
             skipped = np.zeros(n, dtype=np.int64)
         outcomes = np.full(n, UNSETTLED, dtype=np.int32)
+        ended = np.zeros(n, dtype=np.int64)
         slots = len(self.dice)
         current = np.full(slots, -1)  # drop index in each slot
         steps = np.zeros(slots, dtype=np.int64)
@@ -426,12 +431,18 @@ class World:
         cocked_steps = int(np.ceil(s.cocked_time / s.time_step - 1e-9))
         mg = body.mass * s.gravity
         rest = body.heights + s.collision_margin
-        basins = body.basins if early and s.energy_fraction > 0 else None  # None: the energy rule is off
+        # None: the energy rule is off
+        basins = body.basins if early and (s.energy_fraction > 0 or s.capture_energy > 0) else None
         if basins is not None:
-            limit = s.energy_fraction * mg * basins.barriers
+            # (0 times an infinite barrier would be NaN)
+            limit = s.energy_fraction * mg * basins.barriers if s.energy_fraction > 0 else np.zeros(len(rest))
+            if s.capture_energy > 0:  # quasi-static capture: below this energy a die stays in its basin
+                limit = np.maximum(limit, s.capture_energy * mg * body.radius)
             ceiling = (mg * rest + limit).max()  # total energy above which no die is trapped
         else:
             ceiling = -np.inf
+        # with the energy rule a die must be still for cocked_time on a face (settle_time without it)
+        still_window = cocked_steps if early and s.energy_fraction > 0 else settle_steps
         cos_tol = np.cos(np.radians(s.face_tolerance))
         resting = body.basins.resting
         half_m, half_i, normals = 0.5 * body.mass, 0.5 * body.inertia, body.normals
@@ -489,11 +500,12 @@ class World:
             # below its barrier); a short still window is not enough (a die toppling slowly off a face is
             # still for a while), so without the energy rule a die must be still for settle_time and with it
             # (engine errors can hide a tiny barrier) for cocked_time
-            landed = trapped | (down & (still_near >= (settle_steps if basins is None else cocked_steps)))
+            landed = trapped | (down & (still_near >= still_window))
             cocked = ~down & (still_near >= cocked_steps)
             timeout = steps[live] >= max_steps
             for j in np.flatnonzero(landed | cocked | timeout):
                 k = live[j]
+                ended[current[k]] = steps[k]
                 if landed[j]:
                     outcomes[current[k]] = basin[j] if trapped[j] else face[j]
                 else:
@@ -502,7 +514,7 @@ class World:
             if nxt >= n:
                 for k in np.flatnonzero(current < 0):
                     self._park(k)  # idle dice would otherwise fall for the rest of the run
-        return outcomes
+        return (outcomes, ended) if with_steps else outcomes
 
     # -- the straightforward loop ------------------------------------
     def run_plain(self, states: np.ndarray) -> np.ndarray:

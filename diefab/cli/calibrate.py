@@ -58,7 +58,8 @@ def _dice(die_args, realrolls):
 @click.option("--free", default=",".join(DEFAULT_FREE), show_default=True,
               metavar="A,B,...", help="Physics parameters to fit: restitution, friction, rolling_friction, "
               "spinning_friction, spin (top of the spin range), speed (top of the speed range), "
-              "drop_height.")  # fmt: skip
+              "drop_height, capture (quasi-static capture energy, units of m g L; searched on a square "
+              "scale).")  # fmt: skip
 @click.option("--bound", "bounds", multiple=True, metavar="NAME=LOW:HIGH", help="Range searched for a parameter.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Physics seed: common random numbers.")
 @click.option("--sims-per-eval", type=int, default=1000, show_default=True,

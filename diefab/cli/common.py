@@ -229,6 +229,13 @@ def physics_options(func):
             "Early stop: a die in a face's basin with less than this fraction of "
             "the basin's barrier in energy has landed; 0 runs every die until still (default 0.95).",
         ),
+        (
+            "--capture-energy",
+            float,
+            "Quasi-static capture: a die in a face's basin with less energy above rest than this, in units "
+            "of mass x gravity x the die's radius, has landed there (real dice lose energy faster than a "
+            "rigid hull); 0 is the rigid simulation (default 0).",
+        ),
     ]
     for flag, kind, text in reversed(options):
         func = click.option(flag, type=kind, default=None, help=text)(func)
