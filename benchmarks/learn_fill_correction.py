@@ -74,6 +74,8 @@ KERNEL_LENGTHS = (0.3, 0.6, 1.0)
 KERNEL_PENALTIES = (1e-3, 3e-3, 1e-2, 3e-2)
 #: Linear penalties tried together with a kernel term.
 KERNEL_LINEAR_PENALTIES = (0.1, 0.3, 1.0)
+#: Design seeds of the held-out test gems (``bench_fastmodel.py --fill FILL --test-seed 707``): never learned from.
+HELD_OUT_SEEDS = (707,)
 #: Recorded bodies rebuilt to check that the body model has not changed since they were simulated.
 BODY_CHECKS = 3
 #: How far a rebuilt body may lie from the recorded one (model units, and model units² for the inertia).
@@ -251,6 +253,11 @@ def main(argv=None) -> None:
     if args.designs < 0 or args.drops < 1:
         ap.error("--designs must be >= 0 and --drops >= 1")
 
+    held_out = [s for s in HELD_OUT_SEEDS if (args.designs and args.seed == s) or
+                any(str(s) in extra.split("-") for extra in args.extra_set)]  # fmt: skip
+    if held_out:
+        fail(f"learn_fill_correction: design seed {held_out[0]} holds the held-out test gems; train on another")
+
     cache = load_cache()
     name = f"train-{args.fill}-{args.seed}"
     drawn = islice(iter_random_designs(args.seed, args.fill), args.designs)
@@ -269,6 +276,14 @@ def main(argv=None) -> None:
     check_bodies(designs[:checked], runs[:checked])
 
     data = FillData(args.fill, designs, runs)
+    sets = {}
+    for r in runs:
+        # the set's name holds its design seed (train-FILL-SEED)
+        entry = sets.setdefault(r["set"], {"set": r["set"], "physics_seed": r["seed"], "gems": 0, "drops": 0,
+                                           "drops_per_gem": set()})  # fmt: skip
+        entry["gems"] += 1
+        entry["drops"] += int(r["drops"])
+        entry["drops_per_gem"].add(int(r["drops"]))
     print(f"{len(designs)} {args.fill} gems, {int(data.drops.sum())} drops (median {int(np.median(data.drops))} "
           f"per gem; sampling noise alone ~{np.median(noise_floor(data.q, data.drops)):.4f} TVD per gem)")  # fmt: skip
     choice, scores = choose(data)
@@ -281,6 +296,7 @@ def main(argv=None) -> None:
         "min_margin": MIN_MARGIN,
         "drops": int(np.median(data.drops)),
         "total_drops": int(data.drops.sum()),
+        "sets": [v | {"drops_per_gem": sorted(v["drops_per_gem"])} for v in sets.values()],
         "seed": args.physics_seed,
         "physics": physics_version(),
         "settings": PhysicsSettings().as_dict(),
