@@ -21,8 +21,8 @@ import time
 import numpy as np
 
 from diefab import models
+from diefab.basins import RestBasins
 from diefab.design import load_design
-from diefab.geometry import RestBasins
 from diefab.optimize import Problem
 
 DICE = ("fudge-gem", "fudge-gem-paper", "d6", "d20")

@@ -16,7 +16,8 @@ import statistics
 import time
 
 from diefab.design import load_design
-from diefab.fabricate.stl import _cutter, _hull, build_solid, cut_labels
+from diefab.fabricate.engrave import cut_labels, cutter
+from diefab.fabricate.stl import _hull, build_solid
 
 
 def _median_time(fn, repeat: int) -> float:
@@ -45,7 +46,7 @@ def main() -> None:
     def engrave(batched: bool):
         # the cutters are rebuilt each time: manifold3d evaluates lazily and caches results
         body = _hull(design.polyhedron.vertices * scale)
-        cutters = [_cutter(label, depth, False) for label in solid.labels]
+        cutters = [cutter(label, depth, False) for label in solid.labels]
         out = cut_labels(body, cutters, batched=batched)
         out.num_tri()  # force evaluation
         return out

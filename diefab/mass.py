@@ -56,6 +56,7 @@ __all__ = [
     "LabelMass",
     "MassProperties",
     "TabShape",
+    "bed_face",
     "inset",
     "mass_properties",
     "mesh_mass_properties",
@@ -70,6 +71,10 @@ CARD_DENSITY = 0.8
 LINE_WIDTH_FACTOR = 1.125
 #: Engraving depth of the labels in the print model of a design, mm (``diefab stl``'s default).
 LABEL_DEPTH_MM = 0.6
+#: A tab is never wider than this fraction of its edge ("about half the edge").
+TAB_MAX_FRACTION = 0.45
+#: The tab's outer side keeps at least this fraction of the edge length.
+TAB_TOP_FRACTION = 0.1
 
 KINDS = ("solid", "shell", "paper", "print")
 
@@ -462,8 +467,6 @@ def _section_areas(poly: Polyhedron, up: np.ndarray, heights: np.ndarray) -> np.
 
 def tab_polygons(poly: Polyhedron, tabs: tuple[TabShape, ...], mm_per_unit: float) -> np.ndarray:
     """(n, 4, 3) float, model units: each tab glued flat on its face's plane (base on the edge first)."""
-    from .fabricate.unfold import TAB_MAX_FRACTION, TAB_TOP_FRACTION
-
     out = np.empty((len(tabs), 4, 3))
     for i, t in enumerate(tabs):
         p, q = poly.vertices[t.a], poly.vertices[t.b]
@@ -497,6 +500,29 @@ def _paper_moments(poly: Polyhedron, fill: Fill, mm_per_unit: float, tabs: tuple
 
 # ----------------------------------------------------------------------
 # print
+
+
+def bed_face(poly: Polyhedron, overhang_deg: float = 45.0, *, avoid=(), strict: bool = False) -> int:
+    """The face to print on: least overhanging area, then a face not in `avoid`, then the largest.
+
+    With face k on the bed, a face whose outward normal is within
+    `overhang_deg` of straight down (other than face k) needs support; its
+    area counts as overhang.  `avoid` lists faces that carry a label: text on
+    the bed face prints poorly, and raised text would stand the print on its
+    letters.  With `strict`, any face outside `avoid` beats every face in it,
+    whatever the overhang (embossed labels); when all faces are in `avoid`
+    the usual choice stands and the caller engraves that face's label.
+    """
+    limit = math.cos(math.radians(overhang_deg))
+    down = poly.normals @ poly.normals.T  # [k, j]: cos between face j's normal and "down" when k is on the bed
+    overhang = np.where((down > limit + tol.TIE) & ~np.eye(len(poly.faces), dtype=bool), poly.areas[None, :], 0.0)
+    cost = overhang.sum(axis=1)
+    labelled = np.isin(np.arange(len(poly.faces)), list(avoid))
+    pool = np.flatnonzero(~labelled) if strict and not labelled.all() else np.arange(len(poly.faces))
+    best = pool[cost[pool] <= cost[pool].min() + tol.AREA]
+    if not labelled[best].all():
+        best = best[~labelled[best]]
+    return int(best[np.argmax(poly.areas[best])])
 
 
 def wall_depths(poly: Polyhedron, fill: Fill, mm_per_unit: float, bed: int) -> np.ndarray:
@@ -624,7 +650,7 @@ def mass_properties(
         Paper: the glue tabs; default those of the net :func:`diefab.bodies.tab_shapes`
         lays out for `poly` (ignored when ``fill.tabs`` is false).
     bed : int, optional
-        Print: the face on the bed (default :func:`diefab.fabricate.stl.bed_face`).
+        Print: the face on the bed (default :func:`bed_face`).
     labels : tuple of LabelMass
         Print: engraved or embossed labels (mm, the die's coordinates).
     """
@@ -642,8 +668,6 @@ def mass_properties(
             tabs = tab_shapes(poly, mm_per_unit, fill.tab_mm)
         return _properties(*_paper_moments(poly, fill, mm_per_unit, tuple(tabs)))
     if bed is None:
-        from .fabricate.stl import bed_face
-
         bed = bed_face(poly)
     return _properties(*_print_moments(poly, fill, mm_per_unit, bed, tuple(labels)))
 

@@ -22,9 +22,10 @@ from collections.abc import Callable
 
 import numpy as np
 
+from .basins import RestBasins
 from .design import Design
 from .errors import DesignError
-from .geometry import Polyhedron, RestBasins, resting_faces, solid_angles
+from .geometry import Polyhedron, resting_faces, solid_angles
 from .mass import Fill, MassProperties
 
 __all__ = [
@@ -48,7 +49,7 @@ def solid_angle_model(poly: Polyhedron, center: np.ndarray) -> np.ndarray:
     The die first touches down on the face the downward ray from the centre
     of mass meets.  If that face is transitional it tips off it and rolls
     downhill; its share goes to the resting face where that quasi-static
-    flow ends (:attr:`RestBasins.targets <diefab.geometry.RestBasins>`).
+    flow ends (:attr:`RestBasins.targets <diefab.basins.RestBasins>`).
     """
     omega = solid_angles(poly, center)
     p = omega / omega.sum()

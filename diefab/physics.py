@@ -117,7 +117,7 @@ class PhysicsSettings:
         momentarily balanced on an edge can be still for a short while).
     energy_fraction : float
         The landing rule: a die whose orientation lies in face f's basin
-        (:class:`diefab.geometry.RestBasins`) has landed on f once its kinetic
+        (:class:`diefab.basins.RestBasins`) has landed on f once its kinetic
         energy plus potential energy above rest on f is below this fraction
         of the basin's barrier (its lowest saddle): it can no longer leave
         f.  0 turns the rule off (``settle_time`` then decides).  The rest

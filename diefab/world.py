@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .geometry import RestBasins
+from .basins import RestBasins
 
 __all__ = [
     "COCKED",

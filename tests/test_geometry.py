@@ -9,9 +9,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from diefab.basins import RestBasins
 from diefab.errors import GeometryError
 from diefab.families import GEM, gem_polyhedron
-from diefab.geometry import Polyhedron, RestBasins, face_margins, resting_faces, solid_angles, up_faces
+from diefab.geometry import Polyhedron, face_margins, resting_faces, solid_angles, up_faces
 
 CUBE = [[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
 OCTAHEDRON = [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]]

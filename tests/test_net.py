@@ -14,7 +14,8 @@ import pytest
 
 from diefab import Design, Polyhedron, load_design
 from diefab.fabricate.net import design_net, render_net
-from diefab.fabricate.unfold import PAGES, parse_page, unfold
+from diefab.fabricate.pages import PAGES, parse_page
+from diefab.fabricate.unfold import unfold
 
 SVG = "{http://www.w3.org/2000/svg}"
 DESIGN_DIR = Path(__file__).resolve().parent.parent / "templates"
@@ -256,8 +257,8 @@ def test_size_error_names_a_size_that_works():
 def sheets_of(design, net, **kwargs):
     from diefab.fabricate.labels import design_axis
     from diefab.fabricate.net import footer_texts
+    from diefab.fabricate.pages import pack_copies
     from diefab.fabricate.sheet import layout_sheets, plan_footer
-    from diefab.fabricate.unfold import pack_copies
 
     plan = plan_footer(net.page.width, net.page.margin, *footer_texts(design, design.size_mm))
     values = [f for f in design.label_of if f not in design.labels]

@@ -224,10 +224,11 @@ def test_engraved_bed_face_avoids_labels():
 def test_batched_and_sequential_engraving_agree(gem_solid):
     import manifold3d
 
-    from diefab.fabricate.stl import _cutter, _hull
+    from diefab.fabricate.engrave import cutter
+    from diefab.fabricate.stl import _hull
 
     body = _hull(gem_solid.design.polyhedron.vertices * 15.0)
-    cutters = [_cutter(label, 0.6, False) for label in gem_solid.labels]
+    cutters = [cutter(label, 0.6, False) for label in gem_solid.labels]
     one = cut_labels(body, cutters, batched=True)
     many = cut_labels(body, cutters, batched=False)
     assert one.status() == manifold3d.Error.NoError and many.status() == manifold3d.Error.NoError

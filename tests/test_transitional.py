@@ -7,10 +7,11 @@ import json
 import numpy as np
 import pytest
 
+from diefab.basins import RestBasins
 from diefab.design import Design, design_to_toml, parse_design
 from diefab.errors import DesignError
 from diefab.families import gem_polyhedron
-from diefab.geometry import Polyhedron, RestBasins, resting_faces, solid_angles
+from diefab.geometry import Polyhedron, resting_faces, solid_angles
 from diefab.models import MODELS, basin_shares, face_probabilities, value_probabilities
 
 #: A gem too flat for its girdle faces f1-f4: the die rolls off them onto f5-f9.

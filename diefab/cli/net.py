@@ -48,7 +48,7 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
     """
     from ..fabricate.labels import reading_note, small_die_warning
     from ..fabricate.net import design_net, parse_formats, render_net
-    from ..fabricate.unfold import parse_page
+    from ..fabricate.pages import parse_page
     from ..files import check_outputs, ensure_dir, output_path, write_files
 
     kinds = parse_formats(formats)
@@ -68,7 +68,7 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
     balance = paper_balance(d, the_net, design, **card)
     if balance.warning:
         click.echo(f"diefab: warning: {balance.warning}", err=True)
-    from ..fabricate.unfold import pack_copies
+    from ..fabricate.pages import pack_copies
 
     n_pages = max(n.n_pages for n in pack_copies(the_net, copies))
     if as_json:

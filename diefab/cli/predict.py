@@ -67,7 +67,7 @@ def predict(design: str, params, model: str, target: str | None, as_json: bool, 
     transitional = d.transitional_faces
     rolls_to = {}
     if transitional:
-        from ..geometry import RestBasins
+        from ..basins import RestBasins
 
         targets = RestBasins.of(poly, com).targets
         rolls_to = {n: poly.names[targets[k]] for k, n in enumerate(poly.names) if n in transitional}

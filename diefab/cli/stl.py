@@ -77,8 +77,9 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face
     """Printable STL/3MF of DESIGN with its values engraved; report volume, mass and balance."""
     from ..design import format_value
     from ..errors import FabricationError
+    from ..fabricate.formats import inlay_stl_bytes, stl_bytes, threemf_bytes
     from ..fabricate.labels import reading_note
-    from ..fabricate.stl import build_solid, inlay_stl_bytes, stl_bytes, threemf_bytes
+    from ..fabricate.stl import build_solid
 
     kinds = [f.strip().lower() for f in formats.split(",") if f.strip()]
     bad = [f for f in kinds if f not in ("stl", "3mf")]

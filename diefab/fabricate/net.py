@@ -17,8 +17,10 @@ from dataclasses import replace
 from ..design import Design
 from ..errors import FabricationError
 from .labels import design_axis, placed_marks, reading_note
+from .pages import Page, pack_copies, parse_page
+from .tabs import TAB_WIDTH
 from .text import MARKS
-from .unfold import TAB_WIDTH, Net, Page, pack_copies, parse_page, unfold
+from .unfold import Net, unfold
 
 __all__ = ["FORMATS", "design_net", "footer_texts", "parse_formats", "render_net"]
 

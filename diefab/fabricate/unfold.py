@@ -1,15 +1,16 @@
 """Unfolding a convex polyhedron into a paper net with glue tabs.
 
 The net is cut along the complement of a spanning tree of the face-adjacency
-graph: tree edges are folds, every other edge is cut and glued back with one
-trapezoidal tab.  For small dice every spanning tree is tried; larger ones get
+graph (:mod:`.trees`): tree edges are folds, every other edge is cut and
+glued back with one trapezoidal tab (:mod:`.tabs`).  For small dice every spanning tree is tried; larger ones get
 a few hundred candidate trees (steepest-edge unfoldings towards many
 directions, random minimum spanning trees).  A layout is rejected when two
 faces overlap **or** a glue tab overlaps a face or another tab; tabs are
 placed while the layout is checked, narrowed or moved to the other face when
 they would collide.  Among valid layouts the one whose bounding rectangle,
 rotated to fit the page, has the smallest area wins; when no single piece
-fits, the net is split into several pieces that each fit a page.
+fits, the net is split into several pieces that each fit a page, and the
+pieces are packed onto pages (:mod:`.pages`).
 
 The card of the tabs is part of the paper die's body (:mod:`diefab.bodies`),
 so on a symmetric die (:mod:`.symmetry`) the tabs are laid out to keep its
@@ -37,11 +38,9 @@ Examples
 from __future__ import annotations
 
 import heapq
-import itertools
 import math
-import re
 from collections import deque
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
@@ -49,29 +48,25 @@ import numpy as np
 from .. import tolerances as tol
 from ..errors import FabricationError
 from ..geometry import Polyhedron
-from .symmetry import Symmetries, off_axis, symmetries
+from .flat import convex_hull, extents, fit_box, overlap
+from .pages import Page, parse_page, shelf
+from .symmetry import Symmetries, symmetries
+from .tabs import (
+    TAB_MIN_WIDTH,
+    TAB_WIDTH,
+    Grid,
+    Tab,
+    Tabs,
+    cell_size,
+    cut_copies,
+    place_tabs,
+    stack_polygons,
+    tab_offset,
+)
+from .trees import all_trees, edge_key, edge_lookup, face_ring, heuristic_trees, spanning_tree_count
 
-__all__ = ["PAGES", "Net", "Page", "Tab", "pack_copies", "parse_page", "unfold"]
+__all__ = ["Net", "unfold"]
 
-#: Page sizes in millimetres (portrait).
-PAGES = {
-    "A5": (148.0, 210.0),
-    "A4": (210.0, 297.0),
-    "A3": (297.0, 420.0),
-    "LETTER": (215.9, 279.4),
-    "LEGAL": (215.9, 355.6),
-}
-_PAGE_NAMES = {"LETTER": "Letter", "LEGAL": "Legal"}
-
-#: Default glue-tab width, mm.
-TAB_WIDTH = 5.0
-#: A tab is never wider than this fraction of its edge ("about half the edge").
-TAB_MAX_FRACTION = 0.45
-#: The tab's outer side keeps at least this fraction of the edge length.
-TAB_TOP_FRACTION = 0.1
-#: Narrowest tab worth gluing, mm (edges shorter than ~3 mm may take narrower tabs,
-#: down to 0.3 of their length).
-TAB_MIN_WIDTH = 1.0
 #: Spanning trees are enumerated when there are at most this many.
 TREE_LIMIT = 20_000
 #: Candidate trees for larger polyhedra.
@@ -86,72 +81,6 @@ MAX_FINALISTS = 25
 #: (a tree's pieces cost time in proportion to the faces).
 SPLIT_TREES = 12
 SPLIT_FACES = 2400
-#: Widths a tab tries, as fractions of the tab width, before the edge counts as taking none.
-TAB_FACTORS = (1.0, 0.6, 0.35)
-#: Gap between pieces on a page, mm.
-PIECE_GAP = 4.0
-_GRID = np.deg2rad(np.arange(0.0, 180.0, 1.0))
-
-
-@dataclass(frozen=True)
-class Page:
-    """A sheet of paper: size and margins in millimetres.
-
-    The footer band (title, legend, calibration bar) sits inside the bottom
-    margin area and is not available to the net.
-    """
-
-    name: str
-    width: float
-    height: float
-    margin: float = 10.0
-    footer: float = 17.0
-
-    @property
-    def printable(self) -> tuple[float, float]:
-        """Width and height available to the net, mm."""
-        return self.width - 2 * self.margin, self.height - 2 * self.margin - self.footer
-
-
-def parse_page(spec: str) -> Page:
-    """``A5``, ``A4``, ``A3``, ``Letter``, ``Legal`` or ``WxH`` in millimetres (e.g. ``200x250``).
-
-    >>> parse_page("letter").width
-    215.9
-    >>> parse_page("150x200").printable
-    (130.0, 163.0)
-    """
-    text = str(spec).strip()
-    key = text.upper()
-    if key in PAGES:
-        w, h = PAGES[key]
-        return Page(_PAGE_NAMES.get(key, key), w, h)
-    m = re.fullmatch(r"(\d+(?:\.\d+)?)\s*[xX×]\s*(\d+(?:\.\d+)?)", text)
-    if not m:
-        raise FabricationError(f"page {spec!r} is not A5, A4, A3, Letter, Legal or WxH in millimetres (e.g. 200x250)")
-    w, h = float(m.group(1)), float(m.group(2))
-    page = Page(f"{w:g}x{h:g}mm", w, h)
-    pw, ph = page.printable
-    if pw < 20 or ph < 20:
-        raise FabricationError(
-            f"page {spec!r} leaves {pw:g}x{ph:g} mm inside its margins and footer; need at least 20x20 mm"
-        )
-    return page
-
-
-@dataclass(frozen=True)
-class Tab:
-    """A glue tab: a trapezoid on one copy of a cut edge.
-
-    polygon : (4, 2) float, mm, page coordinates: the base (on the face's
-    edge) first, then the outer side.
-    """
-
-    label: str
-    edge: int
-    face: int
-    polygon: np.ndarray
-    page: int
 
 
 @dataclass(frozen=True, eq=False)
@@ -203,7 +132,7 @@ class Net:
 
     def face_edges(self, k: int) -> list[int]:
         """Edge indices along face `k`: entry i joins vertex i and i + 1."""
-        return [_edge_lookup(self.poly)[_key(a, b)] for a, b in _ring(self.poly.faces[k])]
+        return [edge_lookup(self.poly)[edge_key(a, b)] for a, b in face_ring(self.poly.faces[k])]
 
     def lines(self) -> dict[str, list[tuple[int, np.ndarray]]]:
         """``{"cut": [...], "fold": [...]}``: (page, (2, 2) segment) lists.
@@ -231,128 +160,6 @@ class Net:
             for a, b in ((1, 2), (2, 3), (3, 0)):
                 out["cut"].append((t.page, np.array([p[a], p[b]])))
         return out
-
-
-# ----------------------------------------------------------------------
-# topology helpers
-
-
-def _ring(face: np.ndarray):
-    return zip(face.tolist(), np.roll(face, -1).tolist())
-
-
-def _key(a: int, b: int) -> tuple[int, int]:
-    return (a, b) if a < b else (b, a)
-
-
-def _edge_lookup(poly: Polyhedron) -> dict[tuple[int, int], int]:
-    cache = poly.__dict__.setdefault("_net_edge_lookup", None)
-    if cache is None:
-        cache = {(int(a), int(b)): e for e, (a, b) in enumerate(poly.edges)}
-        poly.__dict__["_net_edge_lookup"] = cache
-    return cache
-
-
-def spanning_tree_count(poly: Polyhedron) -> int:
-    """Number of spanning trees of the face-adjacency graph (Kirchhoff's theorem).
-
-    Exact while it fits a float's mantissa; beyond, its order of magnitude
-    (a die with hundreds of faces has more than 10**300).
-    """
-    m = len(poly.faces)
-    lap = np.zeros((m, m))
-    for a, b in poly.edge_faces:
-        lap[a, b] -= 1
-        lap[b, a] -= 1
-        lap[a, a] += 1
-        lap[b, b] += 1
-    _, log_count = np.linalg.slogdet(lap[1:, 1:])
-    if log_count < 700:
-        return int(round(math.exp(log_count)))
-    return 10 ** int(log_count / math.log(10))
-
-
-def _find(parent: list[int], x: int) -> int:
-    while parent[x] != x:
-        parent[x] = parent[parent[x]]
-        x = parent[x]
-    return x
-
-
-def _all_trees(poly: Polyhedron) -> list[tuple[int, ...]]:
-    """Every spanning tree, as sorted tuples of edge indices."""
-    m, ef = len(poly.faces), poly.edge_faces
-    out = []
-    pairs = [(int(a), int(b)) for a, b in ef]
-    for combo in itertools.combinations(range(len(ef)), m - 1):
-        parent = list(range(m))
-        for e in combo:
-            ra, rb = _find(parent, pairs[e][0]), _find(parent, pairs[e][1])
-            if ra == rb:
-                break
-            parent[ra] = rb
-        else:
-            out.append(combo)
-    return out
-
-
-def _kruskal(poly: Polyhedron, weights: np.ndarray) -> tuple[int, ...]:
-    m, ef = len(poly.faces), poly.edge_faces
-    parent = list(range(m))
-    tree = []
-    for e in np.argsort(weights, kind="stable"):
-        ra, rb = _find(parent, int(ef[e, 0])), _find(parent, int(ef[e, 1]))
-        if ra != rb:
-            parent[ra] = rb
-            tree.append(int(e))
-    return tuple(sorted(tree))
-
-
-def _steepest_edge_tree(poly: Polyhedron, direction: np.ndarray) -> tuple[int, ...]:
-    """Schlickeiser's steepest-edge unfolding: every vertex but the highest cuts its steepest upward edge.
-
-    The cut edges span the vertices, so the remaining (fold) edges form a
-    spanning tree of the faces.
-    """
-    v, edges = poly.vertices, poly.edges
-    d = v[edges[:, 1]] - v[edges[:, 0]]
-    slope = d @ direction / np.linalg.norm(d, axis=1)
-    best = np.full(len(v), -np.inf)
-    choice = np.full(len(v), -1)
-    for e, (a, b) in enumerate(edges):
-        # the edge rises from a to b with slope[e]
-        if slope[e] > best[a]:
-            best[a], choice[a] = slope[e], e
-        if -slope[e] > best[b]:
-            best[b], choice[b] = -slope[e], e
-    top = int(np.argmax(v @ direction))
-    cut = {int(choice[i]) for i in range(len(v)) if i != top}
-    folds = tuple(e for e in range(len(edges)) if e not in cut)
-    return folds if len(folds) == len(poly.faces) - 1 else ()
-
-
-def _heuristic_trees(poly: Polyhedron, count: int, rng: np.random.Generator) -> list[tuple[int, ...]]:
-    trees: dict[tuple[int, ...], None] = {}
-    k = np.arange(count) + 0.5
-    phi, theta = np.arccos(1 - 2 * k / count), np.pi * (1 + 5**0.5) * k
-    dirs = np.column_stack([np.cos(theta) * np.sin(phi), np.sin(theta) * np.sin(phi), np.cos(phi)])
-    for d in dirs:
-        t = _steepest_edge_tree(poly, d)
-        if t and _is_tree(poly, t):
-            trees[t] = None
-    lengths = np.linalg.norm(np.diff(poly.vertices[poly.edges], axis=1)[:, 0], axis=1)
-    for _ in range(count // 2):
-        # long edges are good folds (they keep the net compact); jitter for variety
-        trees[_kruskal(poly, -lengths * rng.uniform(0.5, 1.5, len(lengths)))] = None
-        trees[_kruskal(poly, rng.random(len(lengths)))] = None
-    return list(trees)
-
-
-def _is_tree(poly: Polyhedron, tree: tuple[int, ...]) -> bool:
-    """True if the edges `tree` connect all faces without a cycle."""
-    weights = np.ones(len(poly.edges))
-    weights[list(tree)] = 0.0
-    return len(tree) == len(poly.faces) - 1 and set(_kruskal(poly, weights)) == set(tree)
 
 
 # ----------------------------------------------------------------------
@@ -449,25 +256,6 @@ def _place(trees: list[tuple[int, ...]], poly, hinges, padded) -> tuple[np.ndarr
     return np.einsum("tmij,mkj->tmki", world, padded)[..., :2], roots
 
 
-def _overlap(a: np.ndarray, b: np.ndarray, eps: float = tol.NET_OVERLAP_MM) -> np.ndarray:
-    """Separating-axis test of convex polygons, broadcast over leading axes.
-
-    a : (..., K, 2), b : (..., L, 2), vertices in order (repeats allowed).
-    Returns true where the interiors overlap by more than `eps` (mm) along
-    every axis; polygons that only touch along an edge or at a vertex do not.
-    """
-    a, b = np.broadcast_arrays(a[..., :, None, :], b[..., None, :, :])
-    a, b = a[..., :, 0, :], b[..., 0, :, :]
-    edges = np.concatenate([np.roll(a, -1, axis=-2) - a, np.roll(b, -1, axis=-2) - b], axis=-2)
-    length = np.linalg.norm(edges, axis=-1)
-    valid = length > tol.NET_OVERLAP_MM
-    axes = np.stack([edges[..., 1], -edges[..., 0]], axis=-1) / np.where(valid, length, 1.0)[..., None]
-    pa = np.einsum("...ad,...vd->...av", axes, a)
-    pb = np.einsum("...ad,...vd->...av", axes, b)
-    sep = (pa.max(-1) <= pb.min(-1) + eps) | (pb.max(-1) <= pa.min(-1) + eps)
-    return ~(sep & valid).any(-1)
-
-
 def _count_overlaps(world: np.ndarray, sizes: list[int]) -> np.ndarray:
     """(T,) number of overlapping face pairs in each layout of `world` (T, m, K, 2).
 
@@ -487,371 +275,9 @@ def _count_overlaps(world: np.ndarray, sizes: list[int]) -> np.ndarray:
     clash = np.zeros(t, dtype=np.intp)
     for start in range(0, len(tt), 4096):
         sl = slice(start, start + 4096)
-        hit = _overlap(world[tt[sl], iu[pp[sl]]], world[tt[sl], ju[pp[sl]]])
+        hit = overlap(world[tt[sl], iu[pp[sl]]], world[tt[sl], ju[pp[sl]]])
         np.add.at(clash, tt[sl][hit], 1)
     return clash
-
-
-def _extents(points: np.ndarray, angles: np.ndarray = _GRID) -> tuple[np.ndarray, np.ndarray]:
-    """Width and height of the bounding box of `points` (..., n, 2) rotated by each angle: (..., A) each."""
-    c, s = np.cos(angles), np.sin(angles)
-    x = points[..., 0, None] * c - points[..., 1, None] * s
-    y = points[..., 0, None] * s + points[..., 1, None] * c
-    return np.ptp(x, axis=-2), np.ptp(y, axis=-2)
-
-
-def _hull(points: np.ndarray) -> np.ndarray:
-    """Convex hull vertices of 2D points, counter-clockwise (Andrew's monotone chain)."""
-    pts = sorted(set(map(tuple, np.round(points, 9).tolist())))
-    if len(pts) < 3:
-        return np.array(pts)
-
-    def half(seq):
-        out: list = []
-        for p in seq:
-            while (
-                len(out) >= 2
-                and ((out[-1][0] - out[-2][0]) * (p[1] - out[-2][1]) - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0]))
-                <= 0
-            ):
-                out.pop()
-            out.append(p)
-        return out
-
-    return np.array(half(pts)[:-1] + half(pts[::-1])[:-1])
-
-
-def _fit(points: np.ndarray, printable: tuple[float, float], margin: float = 0.0) -> tuple[float, float] | None:
-    """(area, angle) of the smallest bounding box, over rotations that fit `printable`; None if none does.
-
-    Candidate angles: a 1-degree grid and every convex-hull edge laid along
-    either axis (the minimum-area rectangle has a side on a hull edge).
-    """
-    hull = _hull(points)
-    d = np.roll(hull, -1, axis=0) - hull
-    base = -np.arctan2(d[:, 1], d[:, 0])
-    angles = np.concatenate([_GRID, base, base + np.pi / 2])
-    w, h = _extents(hull, angles)
-    w, h = w + 2 * margin, h + 2 * margin
-    ok = (w <= printable[0] + 1e-9) & (h <= printable[1] + 1e-9)
-    if not ok.any():
-        return None
-    area = np.where(ok, w * h, np.inf)
-    i = int(np.argmin(area))
-    return float(area[i]), float(angles[i])
-
-
-# ----------------------------------------------------------------------
-# tabs
-
-
-def _trapezoid(p, q, width, cp, cq) -> np.ndarray | None:
-    """Tab on edge p->q of a counter-clockwise face (outside = right-hand side), or None if too narrow.
-
-    Its sides lean in by `cp` and `cq` (cotangents of their angles to the edge) at p and q.
-    """
-    d = q - p
-    length = float(np.hypot(*d))
-    u = d / length
-    n = np.array([u[1], -u[0]])
-    w = min(width, TAB_MAX_FRACTION * length, (1 - TAB_TOP_FRACTION) * length / (cp + cq))
-    if w < min(TAB_MIN_WIDTH, 0.3 * length) - 1e-12:
-        return None
-    return np.array([p, q, q + w * n - w * cq * u, p + w * n + w * cp * u])
-
-
-def _free_angle(point, direction, shapes) -> float:
-    """Clockwise angle (rad) from `direction` at `point` to the nearest edge of `shapes` leaving `point`."""
-    base = math.atan2(direction[1], direction[0])
-    best = 2 * math.pi
-    for shape in shapes:
-        near = np.flatnonzero(np.hypot(*(shape - point).T) < 1e-6)
-        for i in near:
-            for j in ((i - 1) % len(shape), (i + 1) % len(shape)):
-                d = shape[j] - point
-                if np.hypot(*d) < 1e-6:
-                    continue
-                cw = (base - math.atan2(d[1], d[0])) % (2 * math.pi)
-                if cw > 1e-9:
-                    best = min(best, cw)
-    return best
-
-
-def _place_tabs(polys, piece_of, cut_copies, width, group: Symmetries | None = None):
-    """Greedy tabs: for every cut edge the widest shape, on either copy, that overlaps nothing in its piece.
-
-    polys : list of (k, 2) arrays (layout coordinates); cut_copies : list of
-    (edge, [(face, p, q, a, b), (face, p, q, a, b)]).  With `group` (symmetries
-    that map the cut edges onto themselves) the edges go orbit by orbit: every
-    edge of an orbit takes its tab on the side a symmetry carries the first
-    edge's side to, all of one width, and then the orbit's common shape (see
-    :func:`_symmetrize`); an orbit that cannot is placed one edge at a time.
-    Returns ``(tabs, None)`` with (edge, face, polygon) per cut edge, or
-    ``(partial, edge)`` naming the first edge that can take no tab.
-    """
-    if width == 0:
-        return [], None
-    tabs = _Tabs(polys, piece_of, width)
-    copies = dict(cut_copies)
-    done: set[int] = set()
-    matched = []
-    for e, _ in cut_copies:
-        if e in done:
-            continue
-        orbit, sides = _orbit_sides(e, copies, group)
-        done.update(orbit)
-        if _place_orbit(tabs, orbit, sides, copies):
-            matched.append(orbit)
-            continue
-        for g in orbit:
-            if not tabs.place(g, copies[g]):
-                return tabs.placed, g
-    if group is not None and len(group) > 1:
-        _symmetrize(tabs.placed, matched, copies, group)
-    return tabs.placed, None
-
-
-def _orbit_sides(e: int, copies: dict, group: Symmetries | None) -> tuple[list[int], list[dict[int, int]]]:
-    """The orbit of cut edge `e` (in the order of `copies`) and its consistent tab sides (edge -> face each).
-
-    A side is consistent when no symmetry asks one edge for both of its faces
-    (an edge lying in a mirror plane has none).
-    """
-    if group is None or len(group) == 1:
-        return [e], [{e: c[0]} for c in copies[e]]
-    orbit = set(group.edge[:, e].tolist())
-    sides = []
-    for face, *_ in copies[e]:
-        side: dict[int, int] = {}
-        for g in range(len(group)):
-            e2, f2 = int(group.edge[g, e]), int(group.face[g, face])
-            if side.setdefault(e2, f2) != f2:
-                break
-        else:
-            sides.append(side)
-    return [g for g in copies if g in orbit], sides
-
-
-def _place_orbit(tabs: _Tabs, orbit: list[int], sides: list[dict[int, int]], copies: dict) -> bool:
-    """Tabs on every edge of `orbit` on one of `sides`, all at the widest factor that fits; False if none does."""
-    for factor in TAB_FACTORS:
-        for side in sides:
-            items = [(g, next(c for c in copies[g] if c[0] == side[g])) for g in orbit]
-            if tabs.place_all(items, factor):
-                return True
-    return False
-
-
-def _shape(tab: np.ndarray, p: np.ndarray, q: np.ndarray) -> tuple[float, float, float]:
-    """Width and the two leans (cotangents at p and at q) of a tab on edge p->q."""
-    u = (q - p) / np.hypot(*(q - p))
-    n = np.array([u[1], -u[0]])
-    w = float((tab[3] - p) @ n)
-    return w, float((tab[3] - p) @ u) / w, float((q - tab[2]) @ u) / w
-
-
-def _symmetrize(placed: list, orbits: list[list[int]], copies: dict, group: Symmetries) -> None:
-    """Give the tabs of each orbit one shape (in place): the narrowest width and, at each vertex, the steepest lean.
-
-    The lean at vertex v of the tab on edge x becomes the largest lean at
-    g(v) of the tab on g(x) over the symmetries g, so a symmetry carries
-    every tab onto its image.  The new shape lies inside the old one, so
-    the layout stays free of overlaps.
-    """
-    at = {e: i for i, (e, _, _) in enumerate(placed)}
-    for orbit in orbits:
-        shape, ends = {}, {}
-        for x in orbit:
-            face, tab = placed[at[x]][1:]
-            _, p, q, a, b = next(c for c in copies[x] if c[0] == face)
-            w, cp, cq = _shape(tab, p, q)
-            shape[x], ends[x] = (w, {a: cp, b: cq}), (face, p, q, a, b)
-        width = min(w for w, _ in shape.values())
-        new = {}
-        for x in orbit:
-            lean = dict(shape[x][1])
-            for g in range(len(group)):
-                y = int(group.edge[g, x])
-                for v in lean:
-                    lean[v] = max(lean[v], shape[y][1][int(group.vertex[g, v])])
-            face, p, q, a, b = ends[x]
-            new[x] = (face, _trapezoid(p, q, width, lean[a], lean[b]))
-        if all(t is not None for _, t in new.values()):
-            for x, (face, t) in new.items():
-                placed[at[x]] = (x, face, t)
-
-
-def _tabs_centroid(poly: Polyhedron, mm_per_unit: float, copies: dict, placed: list) -> np.ndarray | None:
-    """Centre of the tabs' card as glued inside the die, model units (each tab on its glued face's plane)."""
-    total, moment = 0.0, np.zeros(3)
-    for e, face, tab in placed:
-        _, p, q, a, b = next(c for c in copies[e] if c[0] == face)
-        u = (q - p) / np.hypot(*(q - p))
-        local = np.column_stack([(tab - p) @ u, (tab - p) @ np.array([u[1], -u[0]])])  # along, outward
-        x, y = local.T
-        x1, y1 = np.roll(x, -1), np.roll(y, -1)
-        cross = x * y1 - x1 * y
-        area = cross.sum() / 2
-        if abs(area) < tol.AREA:
-            continue
-        along, out = ((x + x1) * cross).sum() / (6 * area), ((y + y1) * cross).sum() / (6 * area)
-        glued = int(next(f for f in poly.edge_faces[e] if f != face))
-        start, end = poly.vertices[a], poly.vertices[b]
-        u3 = (end - start) / np.linalg.norm(end - start)
-        inward = np.cross(poly.normals[glued], u3)
-        if inward @ (poly.face_centroids[glued] - start) < 0:
-            inward = -inward
-        moment += abs(area) * (start + (along * u3 + out * inward) / mm_per_unit)
-        total += abs(area)
-    return moment / total if total > 0 else None
-
-
-def _tab_offset(poly, mm_per_unit, copies, placed, group: Symmetries) -> float:
-    """Distance of the tabs' centre from the die's symmetry axis (plane, centre), mm; 0 without tabs."""
-    center = _tabs_centroid(poly, mm_per_unit, copies, placed)
-    return 0.0 if center is None else off_axis(group, center) * mm_per_unit
-
-
-class _Tabs:
-    """Glue tabs placed one cut edge at a time on a layout whose pieces may still be split.
-
-    Each end of a tab leans in by at most 45 degrees and by less where a
-    neighbouring face or tab leaves less room at that vertex.  A tab is
-    tested only against the shapes of its piece that a :class:`_Grid`
-    finds near it, so a die with hundreds of faces costs about as much per
-    edge as a small one.  `piece_of` is read at every test: a caller may
-    move faces (with their tabs) to a new piece between placements, and the
-    tabs already placed stay valid, since a piece only ever loses shapes.
-    """
-
-    def __init__(self, polys: list[np.ndarray], piece_of: np.ndarray, width: float) -> None:
-        self.piece_of, self.width = piece_of, width
-        self.shapes = list(polys)  # faces first, then the tabs as they are placed
-        self.owner = list(range(len(polys)))  # the face each shape belongs to
-        self.grid = _Grid(_cell_size(polys))
-        for k, p in enumerate(polys):
-            self.grid.add(k, p)
-        self.placed: list[tuple[int, int, np.ndarray]] = []
-
-    def _near(self, piece: int, points: np.ndarray, pad: float = 0.0) -> list[np.ndarray]:
-        return [self.shapes[i] for i in self.grid.near(points, pad) if self.piece_of[self.owner[i]] == piece]
-
-    def _fit(self, face: int, p: np.ndarray, q: np.ndarray, factor: float) -> np.ndarray | None:
-        """The tab `factor` times the width on copy (face, p, q) if it overlaps nothing in its piece, else None."""
-        piece = self.piece_of[face]
-        ends = self._near(piece, np.array([p, q]), pad=1e-6)
-        u = (q - p) / np.hypot(*(q - p))
-        # room at p turning clockwise from p->q, at q turning counter-clockwise from q->p
-        ap = min(math.pi / 4, 0.9 * _free_angle(p, u, ends))
-        aq = min(math.pi / 4, 0.9 * _free_angle_ccw(q, -u, ends))
-        if min(ap, aq) < math.radians(3):
-            return None
-        tab = _trapezoid(p, q, factor * self.width, 1 / math.tan(ap), 1 / math.tan(aq))
-        if tab is None:
-            return None
-        near = self._near(piece, tab)
-        if near and _overlap(_stack(near), tab).any():
-            return None
-        return tab
-
-    def _add(self, e: int, face: int, tab: np.ndarray) -> None:
-        self.grid.add(len(self.shapes), tab)
-        self.shapes.append(tab)
-        self.owner.append(face)
-        self.placed.append((e, face, tab))
-
-    def _undo(self, count: int) -> None:
-        """Take back the last `count` tabs."""
-        for _ in range(count):
-            self.grid.remove(len(self.shapes) - 1, self.shapes.pop())
-            self.owner.pop()
-            self.placed.pop()
-
-    def place(self, e: int, copies) -> bool:
-        """Place the widest tab that fits on cut edge `e` (copies: (face, p, q, ...) each); False if none does."""
-        for factor in TAB_FACTORS:
-            for face, p, q, *_ in copies:
-                tab = self._fit(face, p, q, factor)
-                if tab is not None:
-                    self._add(e, face, tab)
-                    return True
-        return False
-
-    def place_all(self, items, factor: float) -> bool:
-        """A tab `factor` times the width on every (edge, (face, p, q, ...)) of `items`, or on none of them."""
-        for k, (e, (face, p, q, *_)) in enumerate(items):
-            tab = self._fit(face, p, q, factor)
-            if tab is None:
-                self._undo(k)
-                return False
-            self._add(e, face, tab)
-        return True
-
-
-class _Grid:
-    """Shapes filed by their bounding boxes in square cells: which of them may meet a query box.
-
-    A spatial index that grows as shapes are added (tabs are placed one
-    by one), unlike a bulk-loaded R-tree.
-    """
-
-    def __init__(self, cell: float) -> None:
-        self.cell = cell
-        self.cells: dict[tuple[int, int], list[int]] = {}
-
-    def _span(self, points: np.ndarray, pad: float):
-        lo = np.floor((points.min(axis=0) - pad) / self.cell).astype(int)
-        hi = np.floor((points.max(axis=0) + pad) / self.cell).astype(int)
-        return itertools.product(range(lo[0], hi[0] + 1), range(lo[1], hi[1] + 1))
-
-    def add(self, key: int, points: np.ndarray) -> None:
-        for c in self._span(points, 0.0):
-            self.cells.setdefault(c, []).append(key)
-
-    def remove(self, key: int, points: np.ndarray) -> None:
-        """Forget `key`, filed with `points`."""
-        for c in self._span(points, 0.0):
-            self.cells[c].remove(key)
-
-    def near(self, points: np.ndarray, pad: float = 0.0) -> list[int]:
-        """Keys of the shapes whose cells meet the bounding box of `points` grown by `pad`, increasing."""
-        out: set[int] = set()
-        for c in self._span(points, pad):
-            out.update(self.cells.get(c, ()))
-        return sorted(out)
-
-
-def _cell_size(polys: list[np.ndarray]) -> float:
-    """A grid cell about the size of a typical face, mm."""
-    return max(float(np.median([np.ptp(p, axis=0).max() for p in polys])), 1e-3)
-
-
-def _stack(shapes: list[np.ndarray]) -> np.ndarray:
-    """(n, K, 2): polygons of different lengths, short ones padded by repeating their last vertex."""
-    k = max(len(p) for p in shapes)
-    return np.array([p if len(p) == k else np.concatenate([p, np.repeat(p[-1:], k - len(p), axis=0)]) for p in shapes])
-
-
-def _free_angle_ccw(point, direction, shapes) -> float:
-    """Counter-clockwise angle (rad) from `direction` at `point` to the nearest edge of `shapes` leaving it."""
-    mirrored = [np.column_stack([s[:, 0], -s[:, 1]]) for s in shapes]
-    return _free_angle(np.array([point[0], -point[1]]), np.array([direction[0], -direction[1]]), mirrored)
-
-
-def _cut_copies(poly: Polyhedron, polys: list[np.ndarray], cut: list[int]):
-    """For every cut edge, its two copies (face, start, end, start vertex, end vertex) in face-CCW order.
-
-    Longest edges first.
-    """
-    lookup = _edge_lookup(poly)
-    copies: dict[int, list] = {e: [] for e in cut}
-    for k, f in enumerate(poly.faces):
-        for i, (a, b) in enumerate(_ring(f)):
-            e = lookup[_key(a, b)]
-            if e in copies:
-                copies[e].append((k, polys[k][i], polys[k][(i + 1) % len(f)], a, b))
-    lengths = {e: float(np.hypot(*(c[0][2] - c[0][1]))) for e, c in copies.items()}
-    return sorted(copies.items(), key=lambda item: (-round(lengths[item[0]], 6), item[0]))
 
 
 # ----------------------------------------------------------------------
@@ -932,10 +358,10 @@ def unfold(
     count = spanning_tree_count(poly)
     m, n_edges = len(poly.faces), len(poly.edges)
     if count <= TREE_LIMIT and math.comb(n_edges, m - 1) <= 20 * TREE_LIMIT:
-        trees, method = _all_trees(poly), "all spanning trees"
+        trees, method = all_trees(poly), "all spanning trees"
     else:
         count = max(8, min(HEURISTIC_TREES, int(PAIR_BUDGET / m**2)))
-        trees, method = _heuristic_trees(poly, count, np.random.default_rng(seed)), "heuristic trees"
+        trees, method = heuristic_trees(poly, count, np.random.default_rng(seed)), "heuristic trees"
 
     group = symmetries(poly)
     keeps = _tree_symmetries(group, trees)  # (T, g): which symmetries map each tree onto itself
@@ -946,7 +372,7 @@ def unfold(
     fits_page = np.empty(len(trees), dtype=bool)
     angles = np.deg2rad(np.arange(0.0, 180.0, 3.0))
     for start in range(0, len(trees), 512):
-        w, h = _extents(world[start : start + 512].reshape(-1, m * world.shape[2], 2), angles)
+        w, h = extents(world[start : start + 512].reshape(-1, m * world.shape[2], 2), angles)
         est[start : start + 512] = (w * h).min(axis=1)
         # the faces alone must fit, allowing for the coarse grid
         fits_page[start : start + 512] = ((w <= printable[0] * 1.03) & (h <= printable[1] * 1.03)).any(axis=1)
@@ -981,8 +407,8 @@ def unfold(
             if layout is not None and (best is None or (len(layout.fits), layout.area) < (len(best.fits), best.area)):
                 best = layout
         if best is not None:
-            copies = dict(_cut_copies(poly, best.polys, list(range(len(poly.edges)))))
-            best.offset = _tab_offset(poly, mm_per_unit, copies, best.tabs, group)
+            copies = dict(cut_copies(poly, best.polys, list(range(len(poly.edges)))))
+            best.offset = tab_offset(poly, mm_per_unit, copies, best.tabs, group)
             best.kept = _kept(group, best.tabs)
     if best is None:
         raise FabricationError("cannot place glue tabs on this net; try a smaller --tab-width")
@@ -1020,18 +446,18 @@ def _single_piece(poly, tree, world_t, rooting, tab_width, printable, group, kep
     polys = [world_t[k, : len(poly.faces[k])] for k in range(m)]
     piece_of = np.zeros(m, dtype=np.intp)
     cut = sorted(set(range(len(poly.edges))) - set(tree))
-    copies = _cut_copies(poly, polys, cut)
+    copies = cut_copies(poly, polys, cut)
     best = None
     rotations = np.linalg.det(kept.matrices) > 0
     for sub in (kept, kept.subgroup(rotations)):
-        tabs, failed = _place_tabs(polys, piece_of, copies, tab_width, sub)
-        fit = None if failed is not None else _fit(np.concatenate(polys + [t for _, _, t in tabs]), printable)
+        tabs, failed = place_tabs(polys, piece_of, copies, tab_width, sub)
+        fit = None if failed is not None else fit_box(np.concatenate(polys + [t for _, _, t in tabs]), printable)
         if fit is None:
             layout = None
         elif len(group) == 1:
             return _Layout(tree, polys, piece_of, rooting[0], tabs, [fit])
         else:
-            offset = _tab_offset(poly, mm_per_unit, dict(copies), tabs, group)
+            offset = tab_offset(poly, mm_per_unit, dict(copies), tabs, group)
             layout = _Layout(tree, polys, piece_of, rooting[0], tabs, [fit], offset, _kept(group, tabs))
         if layout is not None and (best is None or layout.key < best.key):
             best = layout
@@ -1050,8 +476,8 @@ def _split(poly, tree, world_t, rooting, tab_width, printable) -> _Layout | None
     m = len(poly.faces)
     polys = [world_t[k, : len(poly.faces[k])] for k in range(m)]
     piece_of = np.full(m, -1, dtype=np.intp)
-    cell = _cell_size(polys)
-    grids: list[_Grid] = []
+    cell = cell_size(polys)
+    grids: list[Grid] = []
     hulls: list[np.ndarray] = []  # each piece's convex hull so far: its fit is the fit of all its faces
     n_pieces = 0
     for f in order:
@@ -1059,15 +485,15 @@ def _split(poly, tree, world_t, rooting, tab_width, printable) -> _Layout | None
         if p != f:
             k = int(piece_of[p])
             near = grids[k].near(polys[f])
-            if not (near and _overlap(_stack([polys[g] for g in near]), polys[f]).any()):
+            if not (near and overlap(stack_polygons([polys[g] for g in near]), polys[f]).any()):
                 pts = np.concatenate([hulls[k], polys[f]])
-                if _fit(pts, printable, margin=tab_width) is not None:
+                if fit_box(pts, printable, margin=tab_width) is not None:
                     piece_of[f] = k
                     grids[k].add(f, polys[f])
-                    hulls[k] = _hull(pts)
+                    hulls[k] = convex_hull(pts)
                     continue
         piece_of[f] = n_pieces
-        grids.append(_Grid(cell))
+        grids.append(Grid(cell))
         grids[-1].add(f, polys[f])
         hulls.append(polys[f])
         n_pieces += 1
@@ -1083,10 +509,10 @@ def _split(poly, tree, world_t, rooting, tab_width, printable) -> _Layout | None
     # piece of its own (the fold it hung from is cut and queued) and is tried again
     ef = poly.edge_faces
     folds = {e for e in tree if piece_of[ef[e, 0]] == piece_of[ef[e, 1]]}
-    copies = dict(_cut_copies(poly, polys, list(range(len(poly.edges)))))
+    copies = dict(cut_copies(poly, polys, list(range(len(poly.edges)))))
     queue = [(-round(float(np.hypot(*(c[0][2] - c[0][1]))), 6), e) for e, c in copies.items() if e not in folds]
     heapq.heapify(queue)
-    tabs = _Tabs(polys, piece_of, tab_width)
+    tabs = Tabs(polys, piece_of, tab_width)
     for _ in range(m + len(copies) + 1):
         if not queue or tab_width == 0:
             break
@@ -1121,7 +547,7 @@ def _split(poly, tree, world_t, rooting, tab_width, printable) -> _Layout | None
         pts = np.concatenate(
             [polys[f] for f in np.flatnonzero(piece_of == k)] + [t for _, f, t in tabs if piece_of[f] == k]
         )
-        fit = _fit(pts, printable)
+        fit = fit_box(pts, printable)
         if fit is None:
             return None
         fits.append(fit)
@@ -1132,7 +558,7 @@ def _check_size(local, printable, tab_width, size_mm) -> None:
     """Every face with a full-width tab margin must fit the page: else say the largest size that does."""
 
     def fits(scale: float) -> bool:
-        return all(_fit(p * scale, printable, margin=tab_width) is not None for p in local)
+        return all(fit_box(p * scale, printable, margin=tab_width) is not None for p in local)
 
     if fits(1.0):
         return
@@ -1165,7 +591,7 @@ def _finish(poly, mm_per_unit, page: Page, layout: _Layout, stats) -> Net:
         pts = np.concatenate(list(polys.values()) + [t for _, _, t in tabs])
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         pieces.append((polys, tabs, lo, hi - lo))
-    placement = _shelf([size for *_, size in pieces], printable)
+    placement = shelf([size for *_, size in pieces], printable)
     faces: list[np.ndarray | None] = [None] * m
     face_page = np.zeros(m, dtype=np.intp)
     raw_tabs = []
@@ -1189,11 +615,11 @@ def _finish(poly, mm_per_unit, page: Page, layout: _Layout, stats) -> Net:
     raw_tabs.sort(key=lambda r: (r[3], round(r[2].mean(axis=0)[1] / 10), r[2].mean(axis=0)[0]))
     letter_of = {e: _letters(i) for i, (e, *_) in enumerate(raw_tabs)}
     if not raw_tabs:
-        lookup = _edge_lookup(poly)
+        lookup = edge_lookup(poly)
         firsts: dict[int, tuple] = {}
         for k, f in enumerate(poly.faces):
-            for i, (a, b) in enumerate(_ring(f)):
-                e = lookup[_key(a, b)]
+            for i, (a, b) in enumerate(face_ring(f)):
+                e = lookup[edge_key(a, b)]
                 if e not in layout.tree and e not in firsts:
                     mid = (faces[k][i] + faces[k][(i + 1) % len(f)]) / 2
                     firsts[e] = (int(face_page[k]), round(mid[1] / 10), mid[0])
@@ -1217,55 +643,6 @@ def _finish(poly, mm_per_unit, page: Page, layout: _Layout, stats) -> Net:
         edge_labels=letter_of,
         search=stats,
     )
-
-
-def _shelf(sizes, printable) -> dict[int, tuple[int, np.ndarray]]:
-    """Shelf packing, tallest first: item index -> (page, offset of its box from the printable corner)."""
-    placement: dict[int, tuple[int, np.ndarray]] = {}
-    page_no, x, y, shelf = 0, 0.0, 0.0, 0.0
-    for k in sorted(range(len(sizes)), key=lambda k: (-sizes[k][1], k)):
-        w, h = sizes[k]
-        if x > 0 and x + w > printable[0] + 1e-9:
-            x, y, shelf = 0.0, y + shelf + PIECE_GAP, 0.0
-        if y > 0 and y + h > printable[1] + 1e-9:
-            page_no, x, y, shelf = page_no + 1, 0.0, 0.0, 0.0
-        placement[k] = (page_no, np.array([x, y]))
-        x, shelf = x + w + PIECE_GAP, max(shelf, h)
-    return placement
-
-
-def pack_copies(net: Net, copies: int) -> tuple[Net, ...]:
-    """`copies` copies of `net`, their pieces packed together onto as few pages as the shelf packer finds.
-
-    Each copy is a :class:`Net` of its own (same faces, tabs and letters,
-    other positions); ``max(n.n_pages for n in result)`` pages in all.
-    """
-    if isinstance(copies, bool) or not isinstance(copies, (int, np.integer)) or copies < 1:
-        raise FabricationError(f"copies={copies!r} must be a whole number >= 1")
-    if copies == 1:
-        return (net,)
-    boxes = []  # (copy, piece, page, lo, size)
-    for c in range(copies):
-        for piece in range(net.n_pieces):
-            members = np.flatnonzero(net.face_piece == piece)
-            pts = np.concatenate(
-                [net.faces[f] for f in members] + [t.polygon for t in net.tabs if net.face_piece[t.face] == piece]
-            )
-            lo = pts.min(axis=0)
-            boxes.append((c, piece, lo, pts.max(axis=0) - lo))
-    placement = _shelf([b[3] for b in boxes], net.page.printable)
-    corner = np.array([net.page.margin, net.page.margin])
-    moved: list[dict[int, tuple[int, np.ndarray]]] = [{} for _ in range(copies)]
-    for i, (c, piece, lo, _) in enumerate(boxes):
-        pg, at = placement[i]
-        moved[c][piece] = (pg, corner + at - lo)
-    out = []
-    for c in range(copies):
-        shift = [moved[c][int(p)] for p in net.face_piece]
-        faces = tuple(poly + shift[f][1] for f, poly in enumerate(net.faces))
-        tabs = tuple(replace(t, polygon=t.polygon + shift[t.face][1], page=shift[t.face][0]) for t in net.tabs)
-        out.append(replace(net, faces=faces, face_page=np.array([s[0] for s in shift]), tabs=tabs))
-    return tuple(out)
 
 
 def _letters(i: int) -> str:
