@@ -15,28 +15,37 @@ set name (for example the shell gems of ``bench_fastmodel.py --fill shell
 
 It then learns :class:`diefab.fastmodel.FillCorrection` from them: the
 simulated frequencies minus the fast model without the fill's layer, as a
-ridge-regularized linear function of the coordinates, proportional to the
-body's inertia excess.  The coordinates and the penalty are chosen by 5-fold
-cross-validation over gems (the least mean held-out TVD; within 1 % of it, the
-simpler coordinates and the larger penalty), and the result is written to
-``diefab/data/gem-discrepancy-FILL.json``.
+ridge-regularized linear function of the coordinates plus, where it helps, a
+Gaussian kernel ridge term, proportional to the body's inertia excess.  The
+coordinates, the penalties and the kernel term are chosen by 5-fold
+cross-validation over gems (the least mean held-out TVD; within 1 % of it,
+the simpler coordinates, the larger penalties, no kernel term), and the
+result is written to ``diefab/data/gem-discrepancy-FILL.json`` with the
+training sets, their gems, drops and physics seed in ``info["sets"]``.  The
+design seed of the held-out test gems (707) is refused.
 
 Before learning, the bodies of a few training gems are rebuilt with the
 current code and compared with the recorded ones: if the body model has
 changed since the gems were simulated (a new net layout moves the glue
 tabs), the counts no longer describe these dice and the script stops.
 
-Usage::
+Usage (the packaged corrections)::
 
-    nice -n 10 python benchmarks/learn_fill_correction.py --fill paper --seed 607 --designs 30 --drops 1000 \\
-        --extra-set train-paper-606 --workers 1
-    nice -n 10 python benchmarks/learn_fill_correction.py --fill print --seed 606 --designs 27 --drops 1000 \\
-        --extra-set train-print --workers 1
+    nice -n 10 python benchmarks/learn_fill_correction.py --fill paper --seed 608 --designs 150 --drops 2000 \\
+        --workers 2 --collect-only
+    nice -n 10 python benchmarks/learn_fill_correction.py --fill print --seed 608 --designs 200 --drops 2000 \\
+        --workers 2 --collect-only
+    python benchmarks/learn_fill_correction.py --fill paper --designs 0 --extra-set train-paper-608 \\
+        --extra-set train-paper-607 --extra-set train-paper-606
+    python benchmarks/learn_fill_correction.py --fill print --designs 0 --extra-set train-print-608 \\
+        --extra-set train-print-606 --extra-set train-print
     python benchmarks/learn_fill_correction.py --fill shell --designs 0 --extra-set test-404-shell
 
-(the packaged corrections; ``train-paper-606`` holds 61 paper gems simulated
-with the former, asymmetric tab layout, ``train-print`` 26 printed gems of
-design seed 404 at 2,000-5,000 drops).
+(``train-paper-606`` holds 61 paper gems simulated with the former,
+asymmetric tab layout, ``train-paper-607`` 30 and ``train-print-606`` 27 at
+1,000 drops, ``train-print`` 26 printed gems of design seed 404 at
+2,000-5,000 drops).  A larger ``--designs`` with the same seed simulates
+only the gems not yet in the cache.
 
 Measure the result on gems of another seed with ``bench_fastmodel.py --fill FILL --test-seed 707``.
 """
