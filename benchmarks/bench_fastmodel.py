@@ -459,10 +459,16 @@ def main(argv=None) -> None:
         layer = fastmodel.fill_discrepancy(args.fill)
         if layer is not None:
             li = layer.info
-            cv = li["cv"][f"{layer.discrepancy_at} {layer.coordinates} {layer.penalty:g}"]
+            chosen = f"{layer.discrepancy_at} {layer.coordinates} {layer.penalty:g}"
+            if layer.kernel_length:
+                chosen += f" kernel {layer.kernel_length:g} {layer.kernel_penalty:g}"
+            cv = li["cv"][chosen]
+            kernel = ""
+            if layer.kernel_length:
+                kernel = f", kernel length {layer.kernel_length:g} penalty {layer.kernel_penalty:g}"
             print(f"{args.fill} fill: its correction learned from {li['designs']} other {li['fill']['kind']} gems "
                   f"(median {li['drops']} drops; solid discrepancy at the {layer.discrepancy_at}, "
-                  f"{layer.coordinates} coordinates, penalty {layer.penalty:g}), "
+                  f"{layer.coordinates} coordinates, penalty {layer.penalty:g}{kernel}), "
                   f"{FOLDS}-fold CV median TVD {cv['median_tvd']:.4f} (without it {li['before_median_tvd']:.4f}; "
                   "noise included)")  # fmt: skip
     if args.ablation:

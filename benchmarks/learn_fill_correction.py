@@ -15,28 +15,37 @@ set name (for example the shell gems of ``bench_fastmodel.py --fill shell
 
 It then learns :class:`diefab.fastmodel.FillCorrection` from them: the
 simulated frequencies minus the fast model without the fill's layer, as a
-ridge-regularized linear function of the coordinates, proportional to the
-body's inertia excess.  The coordinates and the penalty are chosen by 5-fold
-cross-validation over gems (the least mean held-out TVD; within 1 % of it, the
-simpler coordinates and the larger penalty), and the result is written to
-``diefab/data/gem-discrepancy-FILL.json``.
+ridge-regularized linear function of the coordinates plus, where it helps, a
+Gaussian kernel ridge term, proportional to the body's inertia excess.  The
+coordinates, the penalties and the kernel term are chosen by 5-fold
+cross-validation over gems (the least mean held-out TVD; within 1 % of it,
+the simpler coordinates, the larger penalties, no kernel term), and the
+result is written to ``diefab/data/gem-discrepancy-FILL.json`` with the
+training sets, their gems, drops and physics seed in ``info["sets"]``.  The
+design seed of the held-out test gems (707) is refused.
 
 Before learning, the bodies of a few training gems are rebuilt with the
 current code and compared with the recorded ones: if the body model has
 changed since the gems were simulated (a new net layout moves the glue
 tabs), the counts no longer describe these dice and the script stops.
 
-Usage::
+Usage (the packaged corrections)::
 
-    nice -n 10 python benchmarks/learn_fill_correction.py --fill paper --seed 607 --designs 30 --drops 1000 \\
-        --extra-set train-paper-606 --workers 1
-    nice -n 10 python benchmarks/learn_fill_correction.py --fill print --seed 606 --designs 27 --drops 1000 \\
-        --extra-set train-print --workers 1
+    nice -n 10 python benchmarks/learn_fill_correction.py --fill paper --seed 608 --designs 150 --drops 2000 \\
+        --workers 2 --collect-only
+    nice -n 10 python benchmarks/learn_fill_correction.py --fill print --seed 608 --designs 200 --drops 2000 \\
+        --workers 2 --collect-only
+    python benchmarks/learn_fill_correction.py --fill paper --designs 0 --extra-set train-paper-608 \\
+        --extra-set train-paper-607 --extra-set train-paper-606
+    python benchmarks/learn_fill_correction.py --fill print --designs 0 --extra-set train-print-608 \\
+        --extra-set train-print-606 --extra-set train-print
     python benchmarks/learn_fill_correction.py --fill shell --designs 0 --extra-set test-404-shell
 
-(the packaged corrections; ``train-paper-606`` holds 61 paper gems simulated
-with the former, asymmetric tab layout, ``train-print`` 26 printed gems of
-design seed 404 at 2,000-5,000 drops).
+(``train-paper-606`` holds 61 paper gems simulated with the former,
+asymmetric tab layout, ``train-paper-607`` 30 and ``train-print-606`` 27 at
+1,000 drops, ``train-print`` 26 printed gems of design seed 404 at
+2,000-5,000 drops).  A larger ``--designs`` with the same seed simulates
+only the gems not yet in the cache.
 
 Measure the result on gems of another seed with ``bench_fastmodel.py --fill FILL --test-seed 707``.
 """
@@ -69,6 +78,13 @@ from diefab.stats import tvd  # noqa: E402
 
 #: Ridge penalties the cross-validation chooses from (per training gem, on standardized coordinates).
 PENALTIES = (1e-3, 1e-2, 3e-2, 1e-1, 0.3, 1.0, 10.0)
+#: The kernel term's lengths and penalties (per training gem), tried on top of the chosen linear part.
+KERNEL_LENGTHS = (0.3, 0.6, 1.0)
+KERNEL_PENALTIES = (1e-3, 3e-3, 1e-2, 3e-2)
+#: Linear penalties tried together with a kernel term.
+KERNEL_LINEAR_PENALTIES = (0.1, 0.3, 1.0)
+#: Design seeds of the held-out test gems (``bench_fastmodel.py --fill FILL --test-seed 707``): never learned from.
+HELD_OUT_SEEDS = (707,)
 #: Recorded bodies rebuilt to check that the body model has not changed since they were simulated.
 BODY_CHECKS = 3
 #: How far a rebuilt body may lie from the recorded one (model units, and model units² for the inertia).
@@ -169,22 +185,55 @@ def cached_set(name: str, kind: str, cache: dict) -> tuple[list, list[dict]]:
 
 
 def choose(data: FillData) -> tuple[dict, dict]:
-    """Base, coordinates and penalty by cross-validation; returns the choice and every score."""
+    """Base, coordinates, penalty and kernel term by cross-validation; returns the choice and every score.
+
+    First the linear correction (where the solid discrepancy is taken, the
+    coordinates, the penalty), then a kernel term on top of it (its length
+    and penalty, with the linear penalty again).  In each stage the least
+    mean held-out TVD wins, and within 1 % of it the simpler choice (simpler
+    coordinates, larger penalties, no kernel term).
+    """
     from diefab.fastmodel import DISCREPANCY_AT, FILL_COORDINATES
 
-    scores = {}
+    def score(label: str, **kw) -> tuple[float, float]:
+        err = data.cross_validate(**kw)
+        scores[label] = out = (float(np.median(err)), float(err.mean()))
+        print(f"  {label:<40} {FOLDS}-fold CV TVD median {out[0]:.4f} mean {out[1]:.4f}", file=sys.stderr, flush=True)
+        return out
+
+    scores, linear = {}, {}
     for at in DISCREPANCY_AT:
         for coordinates in FILL_COORDINATES:
             for penalty in PENALTIES:
-                err = data.cross_validate(discrepancy_at=at, coordinates=coordinates, penalty=penalty)
-                score = scores[at, coordinates, penalty] = (float(np.median(err)), float(err.mean()))
-                print(f"  discrepancy at {at:<5} {coordinates:<9} penalty {penalty:<6g} {FOLDS}-fold CV TVD "
-                      f"median {score[0]:.4f} mean {score[1]:.4f}", file=sys.stderr, flush=True)  # fmt: skip
-    least = min(v[1] for v in scores.values())
+                kw = {"discrepancy_at": at, "coordinates": coordinates, "penalty": penalty}
+                linear[at, coordinates, penalty] = score(label(kw), **kw)
+    least = min(v[1] for v in linear.values())
     simple = {c: i for i, c in enumerate(FILL_COORDINATES)}
-    at, coordinates, penalty = min((k for k, v in scores.items() if v[1] <= 1.01 * least),
+    at, coordinates, penalty = min((k for k, v in linear.items() if v[1] <= 1.01 * least),
                                    key=lambda k: (simple[k[1]], -k[2], k[0] != "body"))  # fmt: skip
-    return {"discrepancy_at": at, "coordinates": coordinates, "penalty": penalty}, scores
+    choice = {"discrepancy_at": at, "coordinates": coordinates, "penalty": penalty}
+    if coordinates == "constant":
+        return choice, scores
+    kernel = {}
+    for length in KERNEL_LENGTHS:
+        for kernel_penalty in KERNEL_PENALTIES:
+            for lin in KERNEL_LINEAR_PENALTIES:
+                kw = choice | {"penalty": lin, "kernel_length": length, "kernel_penalty": kernel_penalty}
+                kernel[lin, length, kernel_penalty] = score(label(kw), **kw)
+    best = min(v[1] for v in kernel.values())
+    if best < linear[at, coordinates, penalty][1] / 1.01:
+        lin, length, kernel_penalty = min((k for k, v in kernel.items() if v[1] <= 1.01 * best),
+                                          key=lambda k: (-k[2], -k[0], -k[1]))  # fmt: skip
+        choice |= {"penalty": lin, "kernel_length": length, "kernel_penalty": kernel_penalty}
+    return choice, scores
+
+
+def label(choice: dict) -> str:
+    """How a choice is named in the cross-validation scores (``info["cv"]``)."""
+    text = f"{choice['discrepancy_at']} {choice['coordinates']} {choice['penalty']:g}"
+    if choice.get("kernel_length"):
+        text += f" kernel {choice['kernel_length']:g} {choice['kernel_penalty']:g}"
+    return text
 
 
 def main(argv=None) -> None:
@@ -213,6 +262,11 @@ def main(argv=None) -> None:
     if args.designs < 0 or args.drops < 1:
         ap.error("--designs must be >= 0 and --drops >= 1")
 
+    held_out = [s for s in HELD_OUT_SEEDS if (args.designs and args.seed == s) or
+                any(str(s) in extra.split("-") for extra in args.extra_set)]  # fmt: skip
+    if held_out:
+        fail(f"learn_fill_correction: design seed {held_out[0]} holds the held-out test gems; train on another")
+
     cache = load_cache()
     name = f"train-{args.fill}-{args.seed}"
     drawn = islice(iter_random_designs(args.seed, args.fill), args.designs)
@@ -231,6 +285,14 @@ def main(argv=None) -> None:
     check_bodies(designs[:checked], runs[:checked])
 
     data = FillData(args.fill, designs, runs)
+    sets = {}
+    for r in runs:
+        # the set's name holds its design seed (train-FILL-SEED)
+        entry = sets.setdefault(r["set"], {"set": r["set"], "physics_seed": r["seed"], "gems": 0, "drops": 0,
+                                           "drops_per_gem": set()})  # fmt: skip
+        entry["gems"] += 1
+        entry["drops"] += int(r["drops"])
+        entry["drops_per_gem"].add(int(r["drops"]))
     print(f"{len(designs)} {args.fill} gems, {int(data.drops.sum())} drops (median {int(np.median(data.drops))} "
           f"per gem; sampling noise alone ~{np.median(noise_floor(data.q, data.drops)):.4f} TVD per gem)")  # fmt: skip
     choice, scores = choose(data)
@@ -243,23 +305,21 @@ def main(argv=None) -> None:
         "min_margin": MIN_MARGIN,
         "drops": int(np.median(data.drops)),
         "total_drops": int(data.drops.sum()),
+        "sets": [v | {"drops_per_gem": sorted(v["drops_per_gem"])} for v in sets.values()],
         "seed": args.physics_seed,
         "physics": physics_version(),
         "settings": PhysicsSettings().as_dict(),
         "bodies": [{"params": dict(d.params), **r["body"]} for d, r in list(zip(designs, runs))[:BODY_CHECKS]],
         "on_top_of": "fast model without this layer (chain with the body's inertia + gem discrepancy)",
         "before_median_tvd": round(float(np.median(before)), 5),
-        "cv": {
-            f"{a} {c} {p:g}": {"median_tvd": round(v[0], 5), "mean_tvd": round(v[1], 5)}
-            for (a, c, p), v in scores.items()
-        },
+        "cv": {k: {"median_tvd": round(v[0], 5), "mean_tvd": round(v[1], 5)} for k, v in scores.items()},
     }
     fit = data.learn(**choice, info=info)
     out = DISCREPANCY / fastmodel.fill_discrepancy_file(args.fill)
     atomic_write(out, fit.to_json())
-    median, mean = scores[choice["discrepancy_at"], choice["coordinates"], choice["penalty"]]
-    print(f"learned the {args.fill} correction: solid discrepancy at the {choice['discrepancy_at']}, "
-          f"{choice['coordinates']} coordinates, penalty {choice['penalty']:g}; "
+    median, mean = scores[label(choice)]
+    print(f"learned the {args.fill} correction: {label(choice)} (solid discrepancy at, coordinates, penalty"
+          f"{', kernel length and penalty' if choice.get('kernel_length') else ''}); "
           f"{FOLDS}-fold CV TVD median {median:.4f} mean {mean:.4f} (without it {np.median(before):.4f} "
           f"mean {before.mean():.4f}); wrote {out.relative_to(DISCREPANCY.parents[1])}")  # fmt: skip
 

@@ -696,18 +696,25 @@ class FillCorrection:
     probabilities at random stable gems simulated in the fill, is fitted by
     ridge regression as
 
-    ``r = s / s_mean * W @ phi``
+    ``r = s / s_mean * (W @ phi + sum_j alpha_j k(z, z_j))``
 
     per mirror class of faces, where ``s`` is the body's inertia excess
     (:func:`body_excess`, ``s_mean`` its mean over the training gems) and
     ``phi`` the coordinates: 1 alone (``constant``), with the parameters
     scaled to the unit box (``shape``), or with each mirror class's
-    stability margin and probability as well (``physics``).  Because ``r``
-    is proportional to ``s``, a body with the solid's inertia gets no
-    correction, and the correction shrinks with the fill's excess (a print
-    with more infill); ``s`` is clipped to [0, the training gems' largest].
-    The coordinates and the ridge penalty are chosen by cross-validation
-    over gems (``benchmarks/learn_fill_correction.py``).
+    stability margin and probability as well (``physics``).  The optional
+    kernel term (``kernel_length`` > 0) is kernel ridge regression of what
+    the linear part leaves, per unit of relative excess: ``z`` are the
+    coordinates (without the constant) standardized over the training gems
+    ``z_j``, and ``k(z, z') = exp(-|z - z'|² / (2 dim kernel_length²))``,
+    with penalty ``kernel_penalty`` per training gem.  It follows what a
+    linear function cannot (the error grows fast on a shallow bottom, small
+    d).  Because ``r`` is proportional to ``s``, a body with the solid's
+    inertia gets no correction, and the correction shrinks with the fill's
+    excess (a print with more infill); ``s`` is clipped to [0, the training
+    gems' largest].  The coordinates, the penalties and the kernel's length
+    are chosen by cross-validation over gems
+    (``benchmarks/learn_fill_correction.py``).
 
     Mirror-image faces get the same residual, which sums to 0 over the
     faces (the training residuals do, and the fit is linear in them).  Like
@@ -741,6 +748,10 @@ class FillCorrection:
     discrepancy_at : {"body", "solid"}
         Where the base model evaluates the solid gems' discrepancy
         (:func:`made_gem_base`; chosen by cross-validation with the rest).
+    kernel_length : float
+        Length of the kernel term in standardized coordinates (0: no kernel term).
+    kernel_penalty : float
+        Its ridge penalty per training gem (> 0 when `kernel_length` is).
     """
 
     kind: str
@@ -755,6 +766,8 @@ class FillCorrection:
     residuals: np.ndarray
     info: dict = field(default_factory=dict)
     discrepancy_at: str = "body"
+    kernel_length: float = 0.0
+    kernel_penalty: float = 0.0
 
     _ARRAYS = ("points", "margins", "base", "excess", "residuals")
 
@@ -772,13 +785,17 @@ class FillCorrection:
         penalty: float = 1.0,
         info: Mapping | None = None,
         discrepancy_at: str = "body",
+        kernel_length: float = 0.0,
+        kernel_penalty: float = 0.0,
     ) -> FillCorrection:
         """The correction from simulated `frequencies` (n, 9) of gems made in fill `kind`.
 
         `points` (n, 5) are their parameters, `margins` and `base` (n, 9)
         their margins and fast-model probabilities without this layer,
         `excess` (n,) their :func:`body_excess` (all positive); `base` was
-        computed by :func:`made_gem_base` with `discrepancy_at`.
+        computed by :func:`made_gem_base` with `discrepancy_at`.  A
+        `kernel_length` > 0 adds the kernel term (needs coordinates other
+        than ``constant`` and a `kernel_penalty` > 0).
         """
         if kind not in FILL_LAYERS:
             raise DesignError(f"fill kind={kind!r} is not one of {', '.join(FILL_LAYERS)}")
@@ -788,6 +805,12 @@ class FillCorrection:
             raise DesignError(f"coordinates={coordinates!r} is not one of {', '.join(FILL_COORDINATES)}")
         if not (np.isfinite(penalty) and penalty >= 0):
             raise DesignError(f"penalty={penalty!r} must be a number >= 0")
+        if not (np.isfinite(kernel_length) and kernel_length >= 0):
+            raise DesignError(f"kernel_length={kernel_length!r} must be a number >= 0")
+        if kernel_length > 0 and not (np.isfinite(kernel_penalty) and kernel_penalty > 0):
+            raise DesignError(f"kernel_penalty={kernel_penalty!r} must be a number > 0 with a kernel")
+        if kernel_length > 0 and coordinates == "constant":
+            raise DesignError("a kernel term needs coordinates other than 'constant'")
         points = np.asarray(points, dtype=float)
         n = len(points)
         arrays = {"points": (points, 5), "margins": (margins, 9), "base": (base, 9), "frequencies": (frequencies, 9)}
@@ -808,7 +831,7 @@ class FillCorrection:
         bounds = GEM.bounds([p.name for p in GEM.parameters])
         return cls(
             kind, coordinates, float(penalty), bounds[:, 0], bounds[:, 1], points, margins, base, excess, residuals,
-            dict(info or {}), discrepancy_at,
+            dict(info or {}), discrepancy_at, float(kernel_length), float(kernel_penalty) if kernel_length else 0.0,
         )  # fmt: skip
 
     @classmethod
@@ -816,11 +839,13 @@ class FillCorrection:
         data = json.loads(text)
         arrays = [np.array(data[k], dtype=float) for k in ("lower", "upper", *cls._ARRAYS)]
         at = str(data.get("discrepancy_at", "body"))
-        return cls(data["kind"], data["coordinates"], float(data["penalty"]), *arrays, data["info"], at)
+        kernel = float(data.get("kernel_length", 0.0)), float(data.get("kernel_penalty", 0.0))
+        return cls(data["kind"], data["coordinates"], float(data["penalty"]), *arrays, data["info"], at, *kernel)
 
     def to_json(self) -> str:
         """JSON text, one training gem per line in each array (:meth:`from_json` reads it back)."""
-        return _table_json(self, ("kind", "coordinates", "penalty", "discrepancy_at", "info"), 8)
+        scalars = ("kind", "coordinates", "penalty", "discrepancy_at", "kernel_length", "kernel_penalty", "info")
+        return _table_json(self, scalars, 8)
 
     def _phi(self, points: np.ndarray, margins: np.ndarray, base: np.ndarray) -> np.ndarray:
         """(n, k) float: the coordinates (mirror-class means of margins and probabilities)."""
@@ -846,12 +871,35 @@ class FillCorrection:
         w = np.linalg.solve(xs.T @ xs + ridge, xs.T @ y)
         return w / size[:, None], scale
 
+    @cached_property
+    def _kernel_fit(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The kernel term's training coordinates' mean and spread, their standardized values and weights."""
+        w, scale = self._weights
+        phi = self._phi(self.points, self.margins, self.base)
+        t = self.excess / scale
+        rest = self.residuals[:, list(Discrepancy.CLASSES)] / t[:, None] - phi @ w  # per unit of relative excess
+        z = phi[:, 1:]
+        mean, spread = z.mean(axis=0), z.std(axis=0)
+        spread[spread == 0] = 1.0
+        z = (z - mean) / spread
+        gram = self._kernel(z, z) + self.kernel_penalty * len(z) * np.eye(len(z))
+        return mean, spread, z, np.linalg.solve(gram, rest)
+
+    def _kernel(self, z: np.ndarray, train: np.ndarray) -> np.ndarray:
+        """(n, n_train) Gaussian kernel between standardized coordinates."""
+        d2 = ((z[:, None, :] - train[None, :, :]) ** 2).sum(axis=-1) / z.shape[1]
+        return np.exp(-d2 / (2 * self.kernel_length**2))
+
     def residual(self, params: Mapping[str, float], margins: np.ndarray, p: np.ndarray, excess: float) -> np.ndarray:
         """(9,) float: the learned residual of a gem (see the class docstring), without the fade-out."""
         point = np.array([GEM.complete(params)[n] for n in ("a", "b", "c", "d", "e")], dtype=float)
         w, scale = self._weights
-        r5 = (excess / scale) * (self._phi(point[None], np.atleast_2d(margins), np.atleast_2d(p)) @ w)[0]
-        return r5[_CLASS_OF_FACE]
+        phi = self._phi(point[None], np.atleast_2d(margins), np.atleast_2d(p))
+        r5 = (phi @ w)[0]
+        if self.kernel_length > 0:
+            mean, spread, train, alpha = self._kernel_fit
+            r5 = r5 + (self._kernel((phi[:, 1:] - mean) / spread, train) @ alpha)[0]
+        return (excess / scale) * r5[_CLASS_OF_FACE]
 
     def covers(self, params: Mapping[str, float], margins: np.ndarray) -> bool:
         """Whether :meth:`correct` applies: inside the box, every face with a positive margin."""

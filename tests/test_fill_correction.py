@@ -152,10 +152,44 @@ def test_learn_recovers_an_exact_linear_residual_and_survives_json():
     assert np.allclose(flat.residual(params, margins[3], base[3], excess.mean()), t @ residual / (t @ t), atol=1e-9)
 
 
+def test_the_kernel_term_learns_what_a_linear_function_cannot_and_keeps_the_invariants():
+    """A residual quadratic in d: the kernel term follows it, sums to 0 and survives JSON."""
+    points, margins, base, excess, _, _ = synthetic(120, 7)
+    unit = (points - GEM.bounds(list("abcde"))[:, 0]) / np.ptp(GEM.bounds(list("abcde")), axis=1)
+    bowl = 0.08 * (unit[:, 3] - 0.5) ** 2  # class f5 gains it, f1 (two faces) gives it back
+    r5 = (excess / excess.mean())[:, None] * np.outer(bowl, [-0.5, 0.0, 1.0, 0.0, 0.0])
+    residual = r5[:, [0, 1, 0, 1, 2, 3, 4, 3, 4]]
+    freq = base + residual
+    kw = {"coordinates": "shape", "penalty": 1e-3}
+    linear = FillCorrection.learn("paper", points[:100], margins[:100], base[:100], excess[:100], freq[:100], **kw)
+    kernel = FillCorrection.learn("paper", points[:100], margins[:100], base[:100], excess[:100], freq[:100], **kw,
+                                  kernel_length=1.0, kernel_penalty=1e-5)  # fmt: skip
+    errors = {"linear": [], "kernel": []}
+    for i in range(100, 120):
+        params = dict(zip("abcde", points[i]))
+        for name, fit in (("linear", linear), ("kernel", kernel)):
+            r = fit.residual(params, margins[i], base[i], excess[i])
+            errors[name].append(np.abs(r - residual[i]).max())
+            assert abs(r.sum()) < 1e-12
+            for j, k in MIRRORS:
+                assert r[j] == r[k]
+    assert np.mean(errors["kernel"]) < 0.5 * np.mean(errors["linear"])
+    back = FillCorrection.from_json(kernel.to_json())
+    assert (back.kernel_length, back.kernel_penalty) == (1.0, 1e-5)
+    params = dict(zip("abcde", points[110]))
+    assert np.allclose(back.residual(params, margins[110], base[110], excess[110]),
+                       kernel.residual(params, margins[110], base[110], excess[110]), atol=1e-7)  # fmt: skip
+    assert np.allclose(kernel.residual(params, margins[110], base[110], 0.6),
+                       2 * kernel.residual(params, margins[110], base[110], 0.3), atol=1e-15)  # fmt: skip
+
+
 @pytest.mark.parametrize(
     "change, words",
     [
         ({"kind": "solid"}, "fill kind"),
+        ({"kernel_length": -1.0}, "kernel_length"),
+        ({"kernel_length": 0.5, "kernel_penalty": 0.0}, "kernel_penalty"),
+        ({"kernel_length": 0.5, "kernel_penalty": 1e-3, "coordinates": "constant"}, "kernel term"),
         ({"coordinates": "cubic"}, "coordinates"),
         ({"penalty": -1.0}, "penalty"),
         ({"excess": "zero"}, "excess"),
@@ -168,6 +202,7 @@ def test_learn_checks_its_input(change, words):
     n = change.get("n", 20)
     points, margins, base, excess, freq, _ = synthetic(n, 6)
     kw = {"coordinates": change.get("coordinates", "physics"), "penalty": change.get("penalty", 1.0)}
+    kw |= {k: change[k] for k in ("kernel_length", "kernel_penalty") if k in change}
     if change.get("excess") == "zero":
         excess = excess * 0
     if change.get("margins") == "unstable":
