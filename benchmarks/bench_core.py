@@ -1,4 +1,4 @@
-"""Core numbers of issue 2: the paper's formulas, the solid-angle optimizer, evaluation speed.
+"""Core numbers: the paper's formulas, the solid-angle optimizer, evaluation speed.
 
 Run:  python benchmarks/bench_core.py [--quick]
 

@@ -1,4 +1,4 @@
-"""How well do the landing models track the physics?  (issue 6)
+"""How well do the landing models track the physics?
 
 Draws random stable gems in the family's whole box (a, b, c, d and e free),
 drops each in pybullet (:func:`diefab.physics.simulate`, default settings)

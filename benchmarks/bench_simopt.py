@@ -1,4 +1,4 @@
-"""CMA-ES or Nelder--Mead for design by simulation?  (issue 6)
+"""CMA-ES or Nelder--Mead for design by simulation?
 
 Both methods start from the same point (the fast model's optimum for
 ``fudge-gem``, e free), use the same common random numbers, the same drop

@@ -1,4 +1,4 @@
-"""A fast landing model calibrated against the physics validator (issue 6).
+"""A fast landing model calibrated against the physics validator.
 
 The solid-angle model (the paper's) says where the die first touches down:
 the face hit by the downward ray from the centre of mass.  A real die then

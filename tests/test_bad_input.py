@@ -482,7 +482,7 @@ SIM = ["optimize", "fudge-gem", "--model", "simulation", "--start", "design", "-
     [
         (["validate", "fudge-gem", "--sims", "2000000", "--workers", "2"], signal.SIGKILL, 0.5),
         (["validate", "fudge-gem", "--sims", "2000000", "--workers", "2"], signal.SIGHUP, 0.5),
-        # while the workers are being forked (an interrupt raised in a fork hook used to be swallowed)
+        # while the workers are being forked (an interrupt raised in a fork hook must not be swallowed)
         (["validate", "fudge-gem", "--sims", "2000000", "--workers", "2"], signal.SIGHUP, 0.0),
         ([*SIM, "--workers", "2"], signal.SIGKILL, 0.5),
         ([*SIM, "--workers", "2", "--budget", "7"], signal.SIGHUP, 0.5),
