@@ -10,8 +10,20 @@ from diefab.errors import DesignError
 from diefab.optimize import Problem, optimize_design
 
 
-def test_finds_a_stable_4df_gem_below_the_required_objective():
-    result = optimize_design(load_design("fudge-gem"), seed=0)
+@pytest.fixture(scope="module")
+def optimum():
+    """The gem fitted to 4dF with the default settings (five parameters, margin 0.05)."""
+    return optimize_design(load_design("fudge-gem"), seed=0)
+
+
+@pytest.fixture(scope="module")
+def loose():
+    """The paper's four-parameter gem fitted with a small margin (0.01)."""
+    return optimize_design(load_design("fudge-gem"), names=("a", "b", "c", "d"), min_margin=0.01, seed=0)
+
+
+def test_finds_a_stable_4df_gem_below_the_required_objective(optimum):
+    result = optimum
     assert result.objective <= 0.02
     assert result.margins.min() >= 0.05 - 1e-12
     assert result.design.polyhedron.volume > 0
@@ -19,16 +31,13 @@ def test_finds_a_stable_4df_gem_below_the_required_objective():
     assert set(result.design.params) == {"a", "b", "c", "d", "e"}
 
 
-def test_four_parameter_paper_family_with_a_small_margin():
-    result = optimize_design(load_design("fudge-gem"), names=("a", "b", "c", "d"), min_margin=0.01, seed=0)
-    assert result.objective <= 0.02
-    assert result.margins.min() > 0
+def test_four_parameter_paper_family_with_a_small_margin(loose):
+    assert loose.objective <= 0.02
+    assert loose.margins.min() > 0
 
 
-def test_optimum_sits_on_the_stability_boundary_and_the_margin_moves_it():
-    d = load_design("fudge-gem")
-    loose = optimize_design(d, names=("a", "b", "c", "d"), min_margin=0.01, seed=0)
-    tight = optimize_design(d, names=("a", "b", "c", "d"), min_margin=0.1, seed=0)
+def test_optimum_sits_on_the_stability_boundary_and_the_margin_moves_it(loose):
+    tight = optimize_design(load_design("fudge-gem"), names=("a", "b", "c", "d"), min_margin=0.1, seed=0)
     # the constraint binds: the smallest margin is the one required
     assert loose.margins.min() == pytest.approx(0.01, abs=1e-3)
     assert tight.margins.min() == pytest.approx(0.1, abs=1e-3)
@@ -64,11 +73,10 @@ def test_objectives_are_consistent():
         assert np.abs(r.values - goal).sum() / 2 < 0.1
 
 
-def test_optimum_is_readable():
-    result = optimize_design(load_design("fudge-gem"), seed=0)
-    tops = [t for t in result.design.label_face.values() if t is not None]
+def test_optimum_is_readable(optimum):
+    tops = [t for t in optimum.design.label_face.values() if t is not None]
     assert len(tops) == len(set(tops))
-    assert len(result.design.label_of) == 9  # eight values and the logo
+    assert len(optimum.design.label_of) == 9  # eight values and the logo
 
 
 def test_unreadable_points_score_above_every_readable_stable_one():
