@@ -872,8 +872,14 @@ class FillCorrection:
         return w / size[:, None], scale
 
     @cached_property
-    def _kernel_fit(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The kernel term's training coordinates' mean and spread, their standardized values and weights."""
+    def _kernel_term(self):
+        """The kernel term: the coordinates' mean and spread over the training gems, and the kernel ridge fit.
+
+        Gaussian kernel ridge regression is :class:`scipy.interpolate.RBFInterpolator`
+        with the ``gaussian`` kernel, no polynomial, and the penalty as its smoothing.
+        """
+        from scipy.interpolate import RBFInterpolator
+
         w, scale = self._weights
         phi = self._phi(self.points, self.margins, self.base)
         t = self.excess / scale
@@ -882,13 +888,11 @@ class FillCorrection:
         mean, spread = z.mean(axis=0), z.std(axis=0)
         spread[spread == 0] = 1.0
         z = (z - mean) / spread
-        gram = self._kernel(z, z) + self.kernel_penalty * len(z) * np.eye(len(z))
-        return mean, spread, z, np.linalg.solve(gram, rest)
-
-    def _kernel(self, z: np.ndarray, train: np.ndarray) -> np.ndarray:
-        """(n, n_train) Gaussian kernel between standardized coordinates."""
-        d2 = ((z[:, None, :] - train[None, :, :]) ** 2).sum(axis=-1) / z.shape[1]
-        return np.exp(-d2 / (2 * self.kernel_length**2))
+        # exp(-|z - z'|² / (2 dim length²)) is RBFInterpolator's exp(-(epsilon r)²)
+        epsilon = 1.0 / (self.kernel_length * np.sqrt(2.0 * z.shape[1]))
+        fit = RBFInterpolator(z, rest, kernel="gaussian", epsilon=epsilon, smoothing=self.kernel_penalty * len(z),
+                              degree=-1)  # fmt: skip
+        return mean, spread, fit
 
     def residual(self, params: Mapping[str, float], margins: np.ndarray, p: np.ndarray, excess: float) -> np.ndarray:
         """(9,) float: the learned residual of a gem (see the class docstring), without the fade-out."""
@@ -897,8 +901,8 @@ class FillCorrection:
         phi = self._phi(point[None], np.atleast_2d(margins), np.atleast_2d(p))
         r5 = (phi @ w)[0]
         if self.kernel_length > 0:
-            mean, spread, train, alpha = self._kernel_fit
-            r5 = r5 + (self._kernel((phi[:, 1:] - mean) / spread, train) @ alpha)[0]
+            mean, spread, fit = self._kernel_term
+            r5 = r5 + fit((phi[:, 1:] - mean) / spread)[0]
         return (excess / scale) * r5[_CLASS_OF_FACE]
 
     def covers(self, params: Mapping[str, float], margins: np.ndarray) -> bool:
