@@ -285,7 +285,6 @@ def deviance(counts: np.ndarray, p: np.ndarray) -> float:
 
 def settings_at(base, names: Sequence[str], values: Sequence[float]):
     """`base` (:class:`diefab.physics.PhysicsSettings`) with the calibration parameters `names` set to `values`."""
-
     changes: dict[str, Any] = {}
     for name, value in zip(names, values):
         p = PARAMETERS[name]

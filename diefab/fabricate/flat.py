@@ -32,6 +32,12 @@ def overlap(a: np.ndarray, b: np.ndarray, eps: float = tol.NET_OVERLAP_MM) -> np
     return ~(sep & valid).any(-1)
 
 
+def stack_polygons(shapes: list[np.ndarray]) -> np.ndarray:
+    """(n, K, 2): polygons of different lengths, short ones padded by repeating their last vertex."""
+    k = max(len(p) for p in shapes)
+    return np.array([p if len(p) == k else np.concatenate([p, np.repeat(p[-1:], k - len(p), axis=0)]) for p in shapes])
+
+
 def extents(points: np.ndarray, angles: np.ndarray = GRID_ANGLES) -> tuple[np.ndarray, np.ndarray]:
     """Width and height of the bounding box of `points` (..., n, 2) rotated by each angle: (..., A) each."""
     c, s = np.cos(angles), np.sin(angles)

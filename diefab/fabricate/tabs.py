@@ -20,7 +20,7 @@ import numpy as np
 from .. import tolerances as tol
 from ..geometry import Polyhedron
 from ..mass import TAB_MAX_FRACTION, TAB_TOP_FRACTION
-from .flat import overlap
+from .flat import overlap, stack_polygons
 from .symmetry import Symmetries, off_axis
 from .trees import edge_key, edge_lookup, face_ring
 
@@ -328,12 +328,6 @@ class Grid:
 def cell_size(polys: list[np.ndarray]) -> float:
     """A grid cell about the size of a typical face, mm."""
     return max(float(np.median([np.ptp(p, axis=0).max() for p in polys])), 1e-3)
-
-
-def stack_polygons(shapes: list[np.ndarray]) -> np.ndarray:
-    """(n, K, 2): polygons of different lengths, short ones padded by repeating their last vertex."""
-    k = max(len(p) for p in shapes)
-    return np.array([p if len(p) == k else np.concatenate([p, np.repeat(p[-1:], k - len(p), axis=0)]) for p in shapes])
 
 
 def free_angle_ccw(point, direction, shapes) -> float:

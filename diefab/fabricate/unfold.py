@@ -48,7 +48,7 @@ import numpy as np
 from .. import tolerances as tol
 from ..errors import FabricationError
 from ..geometry import Polyhedron
-from .flat import convex_hull, extents, fit_box, overlap
+from .flat import convex_hull, extents, fit_box, overlap, stack_polygons
 from .pages import Page, parse_page, shelf
 from .symmetry import Symmetries, symmetries
 from .tabs import (
@@ -60,7 +60,6 @@ from .tabs import (
     cell_size,
     cut_copies,
     place_tabs,
-    stack_polygons,
     tab_offset,
 )
 from .trees import all_trees, edge_key, edge_lookup, face_ring, heuristic_trees, spanning_tree_count
@@ -225,12 +224,8 @@ def _rooted(poly: Polyhedron, tree: tuple[int, ...], root: int = 0):
 
 def _padded(local: list[np.ndarray]) -> np.ndarray:
     """(m, K, 3) homogeneous coordinates, short faces padded by repeating their last vertex."""
-    k = max(len(p) for p in local)
-    out = np.ones((len(local), k, 3))
-    for i, p in enumerate(local):
-        out[i, : len(p), :2] = p
-        out[i, len(p) :, :2] = p[-1]
-    return out
+    flat = stack_polygons(local)
+    return np.concatenate([flat, np.ones((*flat.shape[:2], 1))], axis=2)
 
 
 def _place(trees: list[tuple[int, ...]], poly, hinges, padded) -> tuple[np.ndarray, list]:
