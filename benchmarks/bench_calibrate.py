@@ -199,6 +199,9 @@ def main() -> int:
     parser.add_argument("--drops", type=int, default=100, help="drops per die and candidate")
     parser.add_argument("--slow-drops", type=int, default=60, help=f"the same, dice of more than {SLOW_FACES} faces")
     parser.add_argument("--candidates", type=int, default=64, help="Sobol candidates besides the defaults")
+    parser.add_argument("--grid", type=int, default=0,
+                        help="instead: this many evenly spaced candidates of the one free setting (unit scale), "
+                             "and each fit is the candidate of least training deviance, no surface")  # fmt: skip
     parser.add_argument("--prior", type=float, default=0.25,
                         help="prior sd toward the defaults, in parameter ranges (inf: none)")  # fmt: skip
     parser.add_argument(
@@ -229,13 +232,20 @@ def main() -> int:
     spec = make_spec(dice, free=free)
     materials = [MATERIAL.get(d.name, PRINTED) for d in dice]
     x0 = np.array(spec.x0)
-    m = max(int(np.ceil(np.log2(max(args.candidates, 1)))), 0)  # whole powers of 2 keep Sobol's balance
-    points = qmc.Sobol(len(free), scramble=True, seed=args.seed).random_base2(m)[: args.candidates]
-    xs = np.vstack([x0, points])
+    if args.grid:
+        if len(free) != 1 or args.grid < 2:
+            parser.error("--grid needs one free setting and at least 2 points")
+        points = np.linspace(0.0, 1.0, args.grid)[:, None]
+        xs = np.unique(np.vstack([x0, points]).round(12), axis=0)
+    else:
+        m = max(int(np.ceil(np.log2(max(args.candidates, 1)))), 0)  # whole powers of 2 keep Sobol's balance
+        points = qmc.Sobol(len(free), scramble=True, seed=args.seed).random_base2(m)[: args.candidates]
+        xs = np.vstack([x0, points])
     faces = [len(d.design.polyhedron.names) for d in dice]
     drops = [args.slow_drops if f > SLOW_FACES else args.drops for f in faces]
     refine_drops = [args.refine_drops * d // args.drops for d in drops]  # the same ratio for slow dice
-    print(f"{len(dice)} dice, {len(xs)} candidates (defaults + {args.candidates} Sobol points in "
+    kind = f"a grid of {len(xs)} points" if args.grid else f"defaults + {args.candidates} Sobol points"
+    print(f"{len(dice)} dice, {len(xs)} candidates ({kind} in "
           f"{', '.join(f'{n} [{lo:g}, {hi:g}]' for n, (lo, hi) in zip(free, spec.bounds))}); "
           f"{args.drops} drops per die and candidate ({args.slow_drops} for dice of more than {SLOW_FACES} faces), "
           f"seed {args.seed}; {args.refine} refinement rounds of {args.refine_drops} drops; "
@@ -267,7 +277,14 @@ def main() -> int:
                     for i, d in enumerate(dice)])  # fmt: skip
 
     def calibrate(train: list[int], sigma: float, rounds: int = 0) -> np.ndarray:
-        """The fit on the `train` dice; each refinement round drops them at the fit and refits their surfaces."""
+        """The fit on the `train` dice; each refinement round drops them at the fit and refits their surfaces.
+
+        On a grid the fit is the candidate of least training deviance (plus the prior), its simulated counts as
+        they are: no surface, no refinement.
+        """
+        if args.grid:
+            penalty = [prior_penalty(x, x0, sigma) for x in xs]
+            return xs[int(np.argmin(dev[train].sum(axis=0) + penalty))]  # ties: the lowest setting
         order = np.argsort(dev[train].sum(axis=0))[:3]
         starts = [xs[j] for j in order]
         local = {i: (xs, counts[i], surfaces[i]) for i in train}  # this fit's own copies: folds stay independent

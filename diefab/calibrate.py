@@ -109,6 +109,8 @@ PARAMETERS: dict[str, Parameter] = {
         Parameter("capture", "capture_energy", 0.0, 1.0, "m g L", "quasi-static capture energy", power=2.0),
     )
 }
+#: The most points a calibration's grid (``method="grid"``) may have in all.
+MAX_GRID = 1024
 #: Fitted unless ``free`` says otherwise.
 DEFAULT_FREE = ("restitution", "friction", "rolling_friction", "spin", "drop_height")
 
@@ -313,8 +315,11 @@ class CalibrationSpec:
 
     The fields the optimizer reads (`names`, `x0`, `seed`, `sims_per_eval`,
     `max_sims`, `method`, `sigma0`) mean what they mean in
-    :class:`diefab.simopt.RunSpec`; `bounds` maps the unit cube to the
-    settings and `physics` holds the settings that are not fitted.
+    :class:`diefab.simopt.RunSpec`; `method` may also be ``"grid"``:
+    `grid_points` evenly spaced points per parameter in the unit cube,
+    narrowed by successive halving (:func:`diefab.simopt._run_grid`).
+    `bounds` maps the unit cube to the settings and `physics` holds the
+    settings that are not fitted.
     """
 
     dice: tuple[dict[str, Any], ...]
@@ -326,6 +331,7 @@ class CalibrationSpec:
     max_sims: int = 8000
     method: str = "cma"
     sigma0: float = 0.2
+    grid_points: int = 11
     physics: dict[str, Any] = field(default_factory=dict)
     objective: str = "deviance"
     format: int = RUN_FORMAT
@@ -359,8 +365,13 @@ class CalibrationSpec:
             bad(f"seed={self.seed} must be >= 0")
         if not 1 <= self.sims_per_eval <= self.max_sims:
             bad(f"drops per evaluation {self.sims_per_eval} must be >= 1 and <= max {self.max_sims}")
-        if self.method not in ("cma", "nm"):
-            bad(f"method={self.method!r} must be cma or nm")
+        if self.method not in ("cma", "nm", "grid"):
+            bad(f"method={self.method!r} must be cma, nm or grid")
+        if isinstance(self.grid_points, bool) or not isinstance(self.grid_points, (int, np.integer)):
+            bad(f"grid_points={self.grid_points!r} must be an integer")
+        if self.method == "grid" and not (2 <= self.grid_points and self.grid_points ** len(self.names) <= MAX_GRID):
+            bad(f"a grid of {self.grid_points} points per parameter over {len(self.names)} parameters must have "
+                f"2 points or more and {MAX_GRID} in all at most")  # fmt: skip
         if not (math.isfinite(self.sigma0) and 0 < self.sigma0 <= 0.5):
             bad(f"sigma0={self.sigma0} must be in (0, 0.5]")
 

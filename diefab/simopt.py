@@ -11,7 +11,9 @@ noise under control:
   nearby candidates is not drowned in sampling noise.
 * **A method for rough objectives.**  CMA-ES (pycma) in the unit cube of the
   free parameters (default), or Nelder--Mead restarted from the best point
-  (``method="nm"``); ``benchmarks/bench_simopt.py`` compares the two.  Or,
+  (``method="nm"``); ``benchmarks/bench_simopt.py`` compares the two.  For
+  one or two calibration parameters with a switch-like effect, a grid
+  narrowed by successive halving (``method="grid"``, :func:`_run_grid`).  Or,
   with far fewer simulations, defect correction (``method="correction"``):
   the fast model, corrected per throw by the simulated minus modelled face
   probabilities of the dice dropped so far, minimized between rounds of
@@ -450,6 +452,8 @@ def optimize_by_simulation(
             _run_cma(ev, spec, k, floor)
         elif spec.method == "nm":
             _run_nm(ev, spec, k, floor)
+        elif spec.method == "grid":
+            _run_grid(ev, spec, k)
         else:
             _run_correction(ev, spec)
     except _Stop:
@@ -518,6 +522,33 @@ def _run_nm(ev: _Evaluator, spec: RunSpec, k: int, floor) -> None:
         drops = _next_level(drops, spec)
         ev.raise_level(drops)
         size = max(size / 2, 0.005)
+
+
+def _run_grid(ev: _Evaluator, spec, k: int) -> None:
+    """A grid of ``spec.grid_points`` per parameter, then successive halving.
+
+    Every grid point is evaluated at the first drop count; then, level by
+    level, the better half (ties: the earlier point, nearer the grid's low
+    corner) is evaluated again at double the drops, until one point is left
+    or the drops reach ``spec.max_sims``.  Made for one or two parameters
+    whose effect is too sharp for a smooth search (a switch between regimes):
+    it never interpolates, and with common random numbers the halving
+    compares every survivor on the same drops.
+    """
+    axis = np.linspace(0.0, 1.0, spec.grid_points)
+    alive = np.array(np.meshgrid(*([axis] * k), indexing="ij")).reshape(k, -1).T
+    drops = spec.sims_per_eval
+    while True:
+        done = {tuple(np.round(ev.last["x"], 9)): ev.last} if ev.last["drops"] == drops else {}
+        scores = []
+        for x in alive:
+            key = tuple(np.round(x, 9))
+            scores.append(done[key]["objective"] if key in done else ev(x, drops, "grid"))
+        if len(alive) == 1 or drops >= spec.max_sims:
+            return
+        alive = alive[np.argsort(scores, kind="stable")[: (len(alive) + 1) // 2]]
+        drops = _next_level(drops, spec)
+        ev.raise_level(drops)
 
 
 def _face_frequencies(record: dict[str, Any]) -> np.ndarray:

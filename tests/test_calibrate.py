@@ -135,6 +135,9 @@ def test_spec_starts_at_the_base_settings_and_keeps_dice_above_ground(cube_die):
         ({"free": ["spin", "spin"]}, "name one twice"),
         ({"bounds": {"spin": (5.0, 1.0)}}, "low < high"),
         ({"sims_per_eval": 0}, "drops per evaluation"),
+        ({"method": "grid", "grid_points": 1}, "2 points or more"),
+        ({"method": "grid", "grid_points": 33, "free": ["spin", "restitution"]}, "1024 in all"),
+        ({"method": "grid", "grid_points": 2.5}, "must be an integer"),
     ],
 )
 def test_bad_spec(cube_die, kwargs, words):
@@ -206,10 +209,30 @@ def test_driver_finds_the_minimum_and_a_resumed_run_continues_it(cube_die):
     assert again.replayed == 50 and [r["x"] for r in first + rest] == [r["x"] for r in full]
 
 
+def test_grid_halves_toward_the_minimum_on_ever_more_drops(cube_die):
+    from diefab.calibrate import calibrate, make_spec
+
+    spec = make_spec([cube_die], free=["restitution"], method="grid", grid_points=11, sims_per_eval=100,
+                     max_sims=800)  # fmt: skip
+    objective = _quadratic(spec, np.array([0.68]), np.array([[50.0]]))
+    records: list = []
+    result = calibrate(spec, objective=objective, on_evaluation=records.append)
+    assert result.finished and result.best["x"] == pytest.approx([0.7]) and result.best["drops"] == 800
+    grid = [r for r in records if r["kind"] == "grid"]
+    # the start (restitution 0.3 is no grid point) and 11 points at 100 drops, then the better half at each doubling
+    assert sorted(round(r["x"][0], 9) for r in grid if r["drops"] == 100) == pytest.approx(np.linspace(0, 1, 11))
+    survivors = {n: sorted(round(r["x"][0], 1) for r in records if r["drops"] == n and r["kind"] != "start")
+                 for n in (200, 400, 800)}  # fmt: skip
+    assert survivors == {200: [0.4, 0.5, 0.6, 0.7, 0.8, 0.9], 400: [0.6, 0.7, 0.8], 800: [0.6, 0.7]}
+    again = calibrate(spec, objective=objective, history=records[:7])
+    assert again.replayed == 7 and again.best["x"] == result.best["x"] and again.evaluations == len(records)
+
+
 @pytest.mark.parametrize(
     "args, words",
     [
         ([], "at least one die"),
+        (["--die", "d6", "1,1,1,1,1,1", "--method", "grid", "--grid-points", "1"], "2 points or more"),
         (["--die", "d6", "1,2,3"], "6 values"),
         (["--die", "d6", "1,1,1,1,1,1", "--free", "spinn"], "not a calibration parameter"),
         (["--die", "d6", "1,1,1,1,1,1", "--bound", "spin=3"], "NAME=LOW:HIGH"),

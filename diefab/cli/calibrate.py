@@ -68,7 +68,16 @@ def _dice(die_args, realrolls):
 @click.option("--budget", type=float, default=20.0, show_default=True, help="Wall-time budget, minutes.")
 @click.option("--resume", type=click.Path(path_type=Path), default=None, metavar="RUN_DIR",
               help="Continue the interrupted calibration in RUN_DIR.")  # fmt: skip
-@click.option("--method", type=click.Choice(["cma", "nm"]), default="cma", show_default=True)
+@click.option("--method", type=click.Choice(["cma", "nm", "grid"]), default="cma", show_default=True,
+              help="CMA-ES, Nelder-Mead, or a grid narrowed by successive halving (for one or two parameters "
+              "with a switch-like effect, such as capture).")  # fmt: skip
+@click.option(
+    "--grid-points",
+    type=int,
+    default=11,
+    show_default=True,
+    help="Points per parameter of --method grid, evenly spaced on each parameter's search scale.",
+)
 @click.option("--sigma", type=float, default=0.2, show_default=True, help="Initial step, fraction of each range.")
 @click.option("--max-evals", type=int, default=None, help="Stop after this many evaluations.")
 @click.option("--workers", type=int, default=None, help="Worker processes (default all cores).")
@@ -78,7 +87,8 @@ def _dice(die_args, realrolls):
 @json_option
 @click.pass_context
 def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval, max_sims_per_eval, budget, resume,
-              method, sigma, max_evals, workers, scheduler, physics_profile, out_dir, as_json) -> None:  # fmt: skip
+              method, grid_points, sigma, max_evals, workers, scheduler, physics_profile, out_dir,
+              as_json) -> None:  # fmt: skip
     """Fit the physics settings to dice with real rolls and write a physics profile.
 
     Maximizes the simulated likelihood of the real counts (common random
@@ -105,7 +115,8 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
     if resume is not None:
         log = CalibrationLog(resume)
         spec = log.spec()
-        for key, value in {"seed": seed, "sims_per_eval": sims_per_eval, "method": method}.items():
+        for key, value in {"seed": seed, "sims_per_eval": sims_per_eval, "method": method,
+                           "grid_points": grid_points}.items():  # fmt: skip
             source = ctx.get_parameter_source(key)
             if source is not None and source.name == "COMMANDLINE" and value != getattr(spec, key):
                 raise RunError(f"--{key.replace('_', '-')} {value} differs from the run's {getattr(spec, key)} "
@@ -125,7 +136,7 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
         base = load_profile(physics_profile) if physics_profile else PhysicsSettings()
         spec = make_spec(dice, free=names, base=base, bounds=_parse_bounds(bounds), seed=seed,
                          sims_per_eval=sims_per_eval, max_sims=max_sims_per_eval or 8 * sims_per_eval, method=method,
-                         sigma0=sigma)  # fmt: skip
+                         sigma0=sigma, grid_points=grid_points)  # fmt: skip
         run_name = name
         log = CalibrationLog(output_path(out_dir, run_name, ""))
         log.create(spec)
