@@ -60,6 +60,7 @@ __all__ = [
     "RealDie",
     "calibrate",
     "curvature",
+    "grid_interval",
     "deviance",
     "real_die",
     "realrolls_die",
@@ -613,6 +614,30 @@ def curvature(
             span = (spec.values(hi)[i] - spec.values(lo)[i]) / (hi[i] - lo[i]) if hi[i] > lo[i] else 0.0
             out[n]["se"] = float(se * span)
     return out
+
+
+def grid_interval(records: Sequence[Mapping[str, Any]], spec: CalibrationSpec, rise: float = 1.0
+                  ) -> dict[str, tuple[float, float]] | None:  # fmt: skip
+    """Each parameter's range over the grid points whose deviance is within `rise` of the least.
+
+    Reads the evaluations at the drop count that evaluated the most distinct
+    points (the grid's first level).  With ``rise=1`` it is the grid's
+    picture of the one-sigma likelihood-ratio interval (ΔG² = 1 for one
+    parameter); its ends are grid points, so it is no finer than the grid.
+    None when fewer than three points were evaluated at any drop count.
+    """
+    by_drops: dict[int, dict[tuple, float]] = {}
+    for r in records:
+        if r.get("feasible") and "deviance" in r:
+            by_drops.setdefault(r["drops"], {})[tuple(np.round(r["x"], 9))] = r["deviance"]
+    if not by_drops:
+        return None
+    points = max(by_drops.values(), key=len)
+    if len(points) < 3:
+        return None
+    least = min(points.values())
+    near = np.array([spec.values(x) for x, dev in points.items() if dev <= least + rise])
+    return {n: (float(near[:, i].min()), float(near[:, i].max())) for i, n in enumerate(spec.names)}
 
 
 # ----------------------------------------------------------------------

@@ -210,7 +210,7 @@ def test_driver_finds_the_minimum_and_a_resumed_run_continues_it(cube_die):
 
 
 def test_grid_halves_toward_the_minimum_on_ever_more_drops(cube_die):
-    from diefab.calibrate import calibrate, make_spec
+    from diefab.calibrate import calibrate, grid_interval, make_spec
 
     spec = make_spec([cube_die], free=["restitution"], method="grid", grid_points=11, sims_per_eval=100,
                      max_sims=800)  # fmt: skip
@@ -226,6 +226,9 @@ def test_grid_halves_toward_the_minimum_on_ever_more_drops(cube_die):
     assert survivors == {200: [0.4, 0.5, 0.6, 0.7, 0.8, 0.9], 400: [0.6, 0.7, 0.8], 800: [0.6, 0.7]}
     again = calibrate(spec, objective=objective, history=records[:7])
     assert again.replayed == 7 and again.best["x"] == result.best["x"] and again.evaluations == len(records)
+    # deviance 10 + 25 (x - 0.68)^2 is within 1 of its least on the grid points 0.5 ... 0.8
+    lo, hi = grid_interval(records, spec)["restitution"]
+    assert (lo, hi) == pytest.approx((spec.values([0.5])[0], spec.values([0.8])[0]))
 
 
 @pytest.mark.parametrize(

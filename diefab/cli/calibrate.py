@@ -149,7 +149,7 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
 def run(spec, log, run_name, history, budget, max_evals, workers, scheduler, as_json) -> None:
     """Run or continue the calibration in `log`; write the profile as it improves; print the report."""
     from ..calibrate import calibrate as fit
-    from ..calibrate import curvature, die_report
+    from ..calibrate import curvature, die_report, grid_interval
     from ..profiles import profile_to_toml
     from .optimize import _simulation_view
 
@@ -202,6 +202,9 @@ def run(spec, log, run_name, history, budget, max_evals, workers, scheduler, as_
             raise CalibrationError(f"the budget ran out before the first evaluation (--resume {log.folder})")
         raise CalibrationError(f"no candidate could be simulated in {result.evaluations} evaluations")
     fitted = curvature(records, spec, best)
+    if spec.method == "grid":
+        for name, interval in (grid_interval(records, spec) or {}).items():
+            fitted[name]["interval"] = interval
     start = next((r for r in records if r.get("kind") == "start" and r.get("feasible")), None)
     per_die = []
     for k, die in enumerate(dice):
@@ -241,10 +244,12 @@ def print_report(report) -> None:
               f"({report['deviance_per_roll']:.4f} per roll) at {report['drops_per_die']} drops per die"
               + ("" if report["start_deviance"] is None else
                  f"; at the start {report['start_deviance']:.2f} ({report['start_drops_per_die']} drops)"))  # fmt: skip
-    table = Table("parameter", "fitted", "standard error")
+    gridded = any("interval" in fit for fit in report["fitted"].values())
+    table = Table("parameter", "fitted", "standard error", *(["grid points within ΔG² 1"] if gridded else []))
     for name, fit in report["fitted"].items():
         se = "not determined by the counts" if fit["se"] is None else f"{fit['se']:.3g}"
-        table.add_row(name, f"{fit['value']:.4g}", se)
+        interval = ["{:.4g} – {:.4g}".format(*fit["interval"])] if "interval" in fit else ["-"] if gridded else []
+        table.add_row(name, f"{fit['value']:.4g}", se, *interval)
     con.print(table)
     dice = Table("die", "rolls", "TVD fitted", "TVD start", "sampling TVD", "G² (df)", "p")
     for d in report["dice"]:
