@@ -2,6 +2,8 @@
 
     nice -n 10 python benchmarks/bench_calibrate.py --workers 1    # the full run (about 10 minutes, 2 busy cores)
     python benchmarks/bench_calibrate.py --drops 200 --candidates 3 --slow-drops 60 --predict-drops 200  # a quick one
+    python benchmarks/bench_calibrate.py --free capture --grid 11 --drops 2000 --slow-drops 2000 \
+        --predict-drops 10000 --prior inf --workers 2    # capture alone on a grid (7 minutes on 2 cores)
 
 The dice: the paper's die as made (the gem a=1.18 b=0.52 c=0.72 d=1.41 as
 a paper model, i.e. a shell fill) with its 405 real rolls (Table 2), and
@@ -38,6 +40,11 @@ Calibration, affordable on a shared 2-core machine:
    so the folds stay independent) and the fit is repeated: a quadratic
    surface is least accurate where the response is sharp, and the fit lands
    just there.  The held-out die is never dropped in fitting.
+   With ``--grid N`` (one free setting, e.g. ``--free capture``) the
+   candidates are instead N evenly spaced points of the setting's search
+   scale and each fit is the candidate of least training deviance (plus the
+   prior, none with ``--prior inf``): no surface, as ``diefab calibrate
+   --method grid`` fits.
 4. The held-out die is then dropped afresh at its calibrated setting
    (``--predict-drops`` drops, seed ``--predict-seed``, never used in
    fitting), and so is every die at the default physics.

@@ -616,27 +616,26 @@ def curvature(
     return out
 
 
-def grid_interval(records: Sequence[Mapping[str, Any]], spec: CalibrationSpec, rise: float = 1.0
-                  ) -> dict[str, tuple[float, float]] | None:  # fmt: skip
-    """Each parameter's range over the grid points whose deviance is within `rise` of the least.
+def grid_interval(records: Sequence[Mapping[str, Any]], spec: CalibrationSpec, best: Mapping[str, Any],
+                  rise: float = 1.0) -> dict[str, tuple[float, float]] | None:  # fmt: skip
+    """Each parameter's range over the grid points whose deviance is within `rise` of `best`'s.
 
-    Reads the evaluations at the drop count that evaluated the most distinct
-    points (the grid's first level).  With ``rise=1`` it is the grid's
-    picture of the one-sigma likelihood-ratio interval (ΔG² = 1 for one
-    parameter); its ends are grid points, so it is no finer than the grid.
-    None when fewer than three points were evaluated at any drop count.
+    Each point counts with its deviance at the most drops it was dropped
+    with (a point the halving dropped early keeps its early, noisier value).
+    With ``rise=1`` it is the grid's picture of the one-sigma
+    likelihood-ratio interval (ΔG² = 1 for one parameter); its ends are grid
+    points, so it is no finer than the grid.  None when fewer than three
+    points were evaluated.
     """
-    by_drops: dict[int, dict[tuple, float]] = {}
+    latest: dict[tuple, tuple[int, float, np.ndarray]] = {}
     for r in records:
         if r.get("feasible") and "deviance" in r:
-            by_drops.setdefault(r["drops"], {})[tuple(np.round(r["x"], 9))] = r["deviance"]
-    if not by_drops:
+            key = tuple(np.round(r["x"], 9))
+            if key not in latest or r["drops"] >= latest[key][0]:
+                latest[key] = (r["drops"], r["deviance"], spec.values(r["x"]))
+    if len(latest) < 3:
         return None
-    points = max(by_drops.values(), key=len)
-    if len(points) < 3:
-        return None
-    least = min(points.values())
-    near = np.array([spec.values(x) for x, dev in points.items() if dev <= least + rise])
+    near = np.array([v for _n, dev, v in latest.values() if dev <= best["deviance"] + rise])
     return {n: (float(near[:, i].min()), float(near[:, i].max())) for i, n in enumerate(spec.names)}
 
 

@@ -528,12 +528,12 @@ def _run_grid(ev: _Evaluator, spec, k: int) -> None:
     """A grid of ``spec.grid_points`` per parameter, then successive halving.
 
     Every grid point is evaluated at the first drop count; then, level by
-    level, the better half (ties: the earlier point, nearer the grid's low
-    corner) is evaluated again at double the drops, until one point is left
-    or the drops reach ``spec.max_sims``.  Made for one or two parameters
-    whose effect is too sharp for a smooth search (a switch between regimes):
-    it never interpolates, and with common random numbers the halving
-    compares every survivor on the same drops.
+    level, the better half (at least three; ties: the earlier point, nearer
+    the grid's low corner) is evaluated again at double the drops, until
+    the drops reach ``spec.max_sims``.  Made for one or two parameters whose
+    effect is too sharp for a smooth search (a switch between regimes): it
+    never interpolates, and with common random numbers the halving compares
+    every survivor on the same drops.
     """
     axis = np.linspace(0.0, 1.0, spec.grid_points)
     alive = np.array(np.meshgrid(*([axis] * k), indexing="ij")).reshape(k, -1).T
@@ -544,9 +544,9 @@ def _run_grid(ev: _Evaluator, spec, k: int) -> None:
         for x in alive:
             key = tuple(np.round(x, 9))
             scores.append(done[key]["objective"] if key in done else ev(x, drops, "grid"))
-        if len(alive) == 1 or drops >= spec.max_sims:
+        if drops >= spec.max_sims:
             return
-        alive = alive[np.argsort(scores, kind="stable")[: (len(alive) + 1) // 2]]
+        alive = alive[np.argsort(scores, kind="stable")[: max(3, (len(alive) + 1) // 2)]]
         drops = _next_level(drops, spec)
         ev.raise_level(drops)
 

@@ -203,7 +203,7 @@ def run(spec, log, run_name, history, budget, max_evals, workers, scheduler, as_
         raise CalibrationError(f"no candidate could be simulated in {result.evaluations} evaluations")
     fitted = curvature(records, spec, best)
     if spec.method == "grid":
-        for name, interval in (grid_interval(records, spec) or {}).items():
+        for name, interval in (grid_interval(records, spec, best) or {}).items():
             fitted[name]["interval"] = interval
     start = next((r for r in records if r.get("kind") == "start" and r.get("feasible")), None)
     per_die = []
@@ -245,11 +245,13 @@ def print_report(report) -> None:
               + ("" if report["start_deviance"] is None else
                  f"; at the start {report['start_deviance']:.2f} ({report['start_drops_per_die']} drops)"))  # fmt: skip
     gridded = any("interval" in fit for fit in report["fitted"].values())
-    table = Table("parameter", "fitted", "standard error", *(["grid points within ΔG² 1"] if gridded else []))
+    table = Table("parameter", "fitted", "grid points within ΔG² 1" if gridded else "standard error")
     for name, fit in report["fitted"].items():
-        se = "not determined by the counts" if fit["se"] is None else f"{fit['se']:.3g}"
-        interval = ["{:.4g} – {:.4g}".format(*fit["interval"])] if "interval" in fit else ["-"] if gridded else []
-        table.add_row(name, f"{fit['value']:.4g}", se, *interval)
+        if gridded:
+            spread = "{:.4g} – {:.4g}".format(*fit["interval"])
+        else:
+            spread = "not determined by the counts" if fit["se"] is None else f"{fit['se']:.3g}"
+        table.add_row(name, f"{fit['value']:.4g}", spread)
     con.print(table)
     dice = Table("die", "rolls", "TVD fitted", "TVD start", "sampling TVD", "G² (df)", "p")
     for d in report["dice"]:
