@@ -209,6 +209,8 @@ class RunSpec:
     def from_json(cls, text: str, source: str = "run.json") -> RunSpec:
         try:
             data = json.loads(text)
+            if isinstance(data, dict) and data.get("objective") == "deviance":
+                raise ValueError("it is a calibration run (continue it with diefab calibrate --resume)")
             data["names"], data["x0"] = tuple(data["names"]), tuple(float(v) for v in data["x0"])
             data["robust"] = tuple(data.get("robust", ()))
             return cls(**data)
@@ -710,11 +712,16 @@ class RunLog:
                 self.folder.rmdir()
 
     def spec(self) -> RunSpec:
+        return RunSpec.from_json(self.spec_text(), str(self.spec_path))
+
+    def spec_text(self) -> str:
+        """The text of ``run.json``, once the folder is known to hold a run."""
         if not self.folder.is_dir():
-            raise RunError(f"resume folder {self.folder} does not exist")
+            state = "is not a folder" if self.folder.exists() else "does not exist"
+            raise RunError(f"resume folder {self.folder} {state}")
         if not self.spec_path.is_file() or not self.path.is_file():
             raise RunError(f"{self.folder} is not a diefab run folder (no run.json or evaluations.jsonl)")
-        return RunSpec.from_json(self.spec_path.read_text(encoding="utf-8"), str(self.spec_path))
+        return self.spec_path.read_text(encoding="utf-8")
 
     def read(self) -> tuple[list[dict[str, Any]], str | None]:
         """The logged records, and a warning if a torn last line was skipped.
