@@ -51,7 +51,7 @@ from typing import Any
 import numpy as np
 
 from .design import Design
-from .errors import DesignError, DiefabError
+from .errors import DesignError, DiefabError, OutputError
 from .files import atomic_write
 from .geometry import face_margins
 from .optimize import INFEASIBLE, INVALID, OBJECTIVES, Problem, _outside, _polyhedron, candidate_mass
@@ -756,7 +756,7 @@ class RunLog:
     def open(self) -> None:
         """Open for appending, cutting off a torn last line first (call :meth:`read` before)."""
         good = getattr(self, "_good", None)
-        fh = open(self.path, "r+b")  # noqa: SIM115 -- kept open for the run, closed by close()
+        fh = open(self.path, "r+b", buffering=0)  # noqa: SIM115 -- kept open for the run, closed by close()
         if good is not None:
             fh.truncate(good)
             fh.seek(good)
@@ -767,10 +767,25 @@ class RunLog:
         self._fh = fh
 
     def append(self, record: dict[str, Any]) -> None:
-        line = json.dumps(record, separators=(",", ":"), allow_nan=False).encode() + b"\n"
-        self._fh.write(line)
-        self._fh.flush()
-        os.fsync(self._fh.fileno())
+        """Log `record` as one line, on disk when this returns.
+
+        Raises
+        ------
+        OutputError
+            The line could not be written (a full disk); the log is cut back
+            to the lines before it, so the run can be resumed.
+        """
+        line = memoryview(json.dumps(record, separators=(",", ":"), allow_nan=False).encode() + b"\n")
+        start = self._fh.tell()
+        try:
+            while line:  # an unbuffered write may take part of the line
+                line = line[self._fh.write(line) :]
+            os.fsync(self._fh.fileno())
+        except OSError as exc:
+            with contextlib.suppress(OSError):
+                self._fh.truncate(start)
+                self._fh.seek(start)
+            raise OutputError(f"cannot write {self.path}: {exc.strerror or exc}") from exc
 
     def close(self) -> None:
         if self._fh is not None:

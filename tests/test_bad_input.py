@@ -867,3 +867,40 @@ def test_an_interrupt_during_a_write_leaves_no_temporary_file(tmp_path, monkeypa
     assert interrupted == 300  # every interrupt arrived, none was lost
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.toml", "b.toml"]  # and none stranded a temporary file
     assert (tmp_path / "a.toml").read_text() == "a" * 20_000
+
+
+class _FillingFile:
+    """A log file on a disk that fills: the first write takes half the line, the next one fails."""
+
+    def __init__(self, fh) -> None:
+        self.fh, self.writes = fh, 0
+
+    def write(self, data) -> int:
+        self.writes += 1
+        if self.writes > 1:
+            raise OSError(28, "No space left on device")
+        return self.fh.write(bytes(data[: len(data) // 2]))
+
+    def __getattr__(self, name):
+        return getattr(self.fh, name)
+
+
+def test_a_full_disk_mid_run_keeps_the_log_and_says_how_to_resume(tmp_path, bad, run, monkeypatch):
+    from diefab import simopt
+
+    real = simopt.RunLog.append
+
+    def filling(self, record):
+        if record["i"] == 2:  # the disk fills in the middle of the third line
+            self._fh = _FillingFile(self._fh)
+        return real(self, record)
+
+    monkeypatch.setattr(simopt.RunLog, "append", filling)
+    args = ["calibrate", *DIE, "--free", "restitution", "--sims-per-eval", "20", "--workers", "1", "--name", "c"]
+    line = bad(*args, "--max-evals", "5", "--out", tmp_path)
+    assert "No space left on device" in line and f"resume with: diefab calibrate --resume {tmp_path / 'c'}" in line
+    assert (tmp_path / "c" / "evaluations.jsonl").read_text().count("\n") == 2  # no torn third line
+    monkeypatch.setattr(simopt.RunLog, "append", real)
+    code, out, err = run("calibrate", "--resume", tmp_path / "c", "--max-evals", "5", "--workers", "1", "--json")
+    assert code == 0 and not err, err
+    assert json.loads(out)["replayed"] == 2 and json.loads(out)["evaluations"] == 5

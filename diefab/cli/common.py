@@ -10,6 +10,7 @@ import click
 import numpy as np
 
 from ..design import Design, load_design
+from ..errors import OutputError
 
 
 def console(stderr: bool = False):
@@ -265,9 +266,11 @@ def run_logged(call, log, live, client, resume: str, on_failure=None):
         log.close()
         click.echo(f"diefab: interrupted; resume with: {resume}", err=True)
         sys.exit(130)
-    except BaseException:
+    except BaseException as exc:
         if on_failure is not None:
             on_failure()
+        if isinstance(exc, OutputError) and log.holds_run():  # a full disk: what was logged is kept
+            raise OutputError(f"{exc}; the evaluations logged so far are kept, resume with: {resume}") from exc
         raise
     finally:
         if live:
