@@ -904,3 +904,19 @@ def test_a_full_disk_mid_run_keeps_the_log_and_says_how_to_resume(tmp_path, bad,
     code, out, err = run("calibrate", "--resume", tmp_path / "c", "--max-evals", "5", "--workers", "1", "--json")
     assert code == 0 and not err, err
     assert json.loads(out)["replayed"] == 2 and json.loads(out)["evaluations"] == 5
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--sigma", "0.3"], "--sigma 0.3 differs from the run's 0.2"),
+        (["--max-sims-per-eval", "100"], "--max-sims-per-eval 100 differs from the run's 160"),
+        (["--name", "other"], "--name other differs from the folder of --resume"),
+        (["--out", "elsewhere"], "--out elsewhere differs from the folder of --resume"),
+    ],
+)
+def test_a_resumed_calibration_keeps_its_settings(calibration_run, bad, monkeypatch, args, words):
+    monkeypatch.chdir(calibration_run)
+    before = (calibration_run / "evaluations.jsonl").read_text()
+    assert words in bad("calibrate", "--resume", calibration_run, *args)
+    assert (calibration_run / "evaluations.jsonl").read_text() == before and not Path("elsewhere").exists()

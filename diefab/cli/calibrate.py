@@ -10,6 +10,7 @@ import numpy as np
 from ..calibrate import DEFAULT_FREE
 from ..files import atomic_write, check_outputs, output_path
 from .common import (
+    check_resume_folder,
     console,
     emit_json,
     get_design,
@@ -117,7 +118,7 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
     for value, hint in ((sims_per_eval, "--sims-per-eval"), (max_evals, "--max-evals"), (workers, "--workers")):
         if value is not None and value <= 0:
             raise click.BadParameter(f"{value} must be > 0", param_hint=hint)
-    if max_sims_per_eval is not None and max_sims_per_eval < sims_per_eval:
+    if resume is None and max_sims_per_eval is not None and max_sims_per_eval < sims_per_eval:
         raise click.BadParameter(f"{max_sims_per_eval} must be >= --sims-per-eval", param_hint="--max-sims-per-eval")
     if not (np.isfinite(budget) and budget > 0):
         raise click.BadParameter(f"{budget} must be a positive number of minutes", param_hint="--budget")
@@ -134,11 +135,16 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
     if resume is not None:
         log = CalibrationLog(resume)
         spec = log.spec()
-        for key, value in {"seed": seed, "sims_per_eval": sims_per_eval, "method": method,
-                           "grid_points": grid_points}.items():  # fmt: skip
-            source = ctx.get_parameter_source(key)
+        check_resume_folder(ctx, resume, out_dir)
+        if ctx.get_parameter_source("name").name == "COMMANDLINE" and name != Path(resume).resolve().name:
+            raise click.UsageError(f"--name {name} differs from the folder of --resume {resume}", ctx=ctx)
+        stored = {"seed": seed, "sims_per_eval": sims_per_eval, "method": method, "grid_points": grid_points,
+                  "sigma0": sigma, "max_sims": max_sims_per_eval}  # fmt: skip
+        for key, value in stored.items():
+            option = {"sigma0": "sigma", "max_sims": "max_sims_per_eval"}.get(key, key)
+            source = ctx.get_parameter_source(option)
             if source is not None and source.name == "COMMANDLINE" and value != getattr(spec, key):
-                raise RunError(f"--{key.replace('_', '-')} {value} differs from the run's {getattr(spec, key)} "
+                raise RunError(f"--{option.replace('_', '-')} {value} differs from the run's {getattr(spec, key)} "
                                f"(stored in {log.spec_path})")  # fmt: skip
         for key, flag in (("die_args", "--die"), ("realrolls", "--realrolls"), ("free", "--free"),
                           ("bounds", "--bound"), ("physics_profile", "--physics")):  # fmt: skip

@@ -247,6 +247,14 @@ def physics_options(func):
     return func
 
 
+def check_resume_folder(ctx: click.Context, resume: Path, out_dir: Path) -> None:
+    """Refuse an ``--out`` given with ``--resume`` that is not the run folder's own: a run stays where it is."""
+    source = ctx.get_parameter_source("out_dir")
+    if source is not None and source.name == "COMMANDLINE" and Path(out_dir).resolve() != Path(resume).resolve().parent:
+        raise click.UsageError(f"--out {out_dir} differs from the folder of --resume {resume} (a run stays where "
+                               "it is)", ctx=ctx)  # fmt: skip
+
+
 def run_logged(call, log, live, client, resume: str, on_failure=None):
     """``call()`` with the run `log` open and the `live` panel shown; Ctrl-C says how to resume.
 
