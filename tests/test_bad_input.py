@@ -920,3 +920,30 @@ def test_a_resumed_calibration_keeps_its_settings(calibration_run, bad, monkeypa
     before = (calibration_run / "evaluations.jsonl").read_text()
     assert words in bad("calibrate", "--resume", calibration_run, *args)
     assert (calibration_run / "evaluations.jsonl").read_text() == before and not Path("elsewhere").exists()
+
+
+REALROLLS_FIELDS = ["shape", "description", "physical", "physical.outcomes", "physical.counts", "physical.counts.0",
+                    "their_model_and_sims.ours", "geometry.hull_vertices", "geometry.hull_vertices.0",
+                    "geometry.hull_faces", "geometry.hull_faces.0", "fabricated_body.volume", "fabricated_body.com",
+                    "fabricated_body.inertia_about_com_unit_density", "outcome_faces", "outcome_stable_faces.0",
+                    "ambiguous_groups"]  # fmt: skip
+
+
+@pytest.mark.skipif(not REALROLLS.is_file(), reason="no real-rolls data")
+@pytest.mark.parametrize("field", REALROLLS_FIELDS)
+def test_any_value_in_any_realrolls_field_is_a_die_or_a_diefab_error(field, tmp_path):
+    from hypothesis import HealthCheck, given, settings
+
+    from diefab.calibrate import realrolls_die
+    from diefab.errors import DiefabError
+
+    @settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @given(value=_toml_values())
+    def check(value):
+        path = _realrolls(tmp_path, field, value)
+        try:
+            realrolls_die(path)
+        except DiefabError:
+            pass
+
+    check()
