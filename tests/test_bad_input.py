@@ -833,6 +833,7 @@ def test_bad_physics_profile_in_every_command(tmp_path, bad, monkeypatch, comman
             ["optimize", "fudge-gem", "--model", "simulation", "--resume", "afile"],
             "resume folder afile is not a folder",
         ),
+        (["stl", "fudge-gem", "--font", "/dev/zero", "--out", "out"], "font file /dev/zero is not a regular file"),
     ],
 )
 def test_messages_name_the_culprit(tmp_path, bad, monkeypatch, args, words):
