@@ -252,6 +252,12 @@ BAD_ARGS = [
     (["optimize", "fudge-gem", "--model", "simulation", "--resume", "/nonexistent"], "does not exist"),
     (["validate", "fudge-gem", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "--workers does not apply"),
     (["validate", "fudge-gem", "--seed", "-1"], "--seed"),
+    (["design", "4df", "--seed", "-1"], "--seed"),  # it used to be an internal error
+    (["predict", "fudge-gem", "--fill", "paper", "--nozzle", "0.5"], "--nozzle applies only to --fill print"),
+    (["predict", "fudge-gem", "--card", "200"], "--card applies only to --fill paper (the fill is solid)"),
+    (["validate", "fudge-gem", "--fill", "print", "--glue", "5"], "--glue applies only to --fill paper"),
+    (["optimize", "fudge-gem", "--infill", "0.3"], "--infill applies only to --fill print"),
+    (["design", "4df", "--fill", "paper", "--nozzle", "0.4"], "--nozzle applies only to --fill print"),
 ]  # fmt: skip
 
 

@@ -323,6 +323,14 @@ def fill_options(*groups: str, kind: bool = True):
     return decorate
 
 
+def check_fill_options(kind: str, settings: dict) -> None:
+    """Refuse a material option given (not None) that a fill of `kind` does not read: it would be ignored."""
+    for option, value in settings.items():
+        group = FILL_OPTIONS[option][2][1:].split("]")[0] if option in FILL_OPTIONS else kind
+        if value is not None and group != kind:
+            raise click.UsageError(f"--{option.replace('_', '-')} applies only to --fill {group} (the fill is {kind})")
+
+
 def apply_fill(design: Design, fill_kind: str | None = None, **settings) -> Design:
     """`design` with its fill's kind and the given settings (None: keep) replaced; DesignError if out of range."""
     from dataclasses import replace
@@ -331,6 +339,7 @@ def apply_fill(design: Design, fill_kind: str | None = None, **settings) -> Desi
     changes = {FILL_OPTIONS[k][0]: v for k, v in settings.items() if k in FILL_OPTIONS and v is not None}
     if fill_kind is None and not changes:
         return design
+    check_fill_options(fill_kind or fill.kind, settings)
     return replace(design, fill=replace(fill, kind=fill_kind or fill.kind, **changes))
 
 
