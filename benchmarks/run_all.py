@@ -16,23 +16,29 @@ from pathlib import Path
 
 HERE = Path(__file__).parent
 
-#: script -> arguments for the full and the quick run
-BENCHMARKS = {
-    "bench_core.py": ([], ["--quick"]),
-    "bench_net.py": ([], []),
-    "bench_stl.py": ([], ["--repeat", "3"]),
-    "bench_validate.py": ([], ["--n", "3000"]),
-    "bench_fastmodel.py": ([], ["--designs", "4", "--drops", "3000"]),
-    "bench_families.py": (["--designs", "4", "--drops", "3000"], ["--designs", "1", "--drops", "500"]),
-    "bench_simopt.py": ([], ["--budget", "1", "--validate", "3000"]),
-    "bench_calibrate.py": (
+#: (script, arguments of the full run, arguments of the quick run)
+BENCHMARKS = [
+    ("bench_core.py", [], ["--quick"]),
+    ("bench_net.py", [], []),
+    ("bench_stl.py", [], ["--repeat", "3"]),
+    ("bench_validate.py", [], ["--n", "3000"]),
+    ("bench_fastmodel.py", [], ["--designs", "4", "--drops", "3000"]),
+    ("bench_families.py", ["--designs", "4", "--drops", "3000"], ["--designs", "1", "--drops", "500"]),
+    ("bench_simopt.py", [], ["--budget", "1", "--validate", "3000"]),
+    (
+        "bench_calibrate.py",
         [],
         ["--drops", "100", "--slow-drops", "30", "--candidates", "3", "--predict-drops", "100", "--cache", "/dev/null"],
     ),
-    "bench_realrolls.py": ([], ["--sims", "200"]),
-    "bench_basins.py": ([], []),
-    "bench_many_faces.py": ([], ["--sims", "40"]),
-}
+    (
+        "bench_calibrate.py",
+        "--free capture --grid 11 --drops 2000 --slow-drops 2000 --predict-drops 10000 --prior inf".split(),
+        "--free capture --grid 3 --drops 100 --slow-drops 30 --predict-drops 100 --prior inf --cache /dev/null".split(),
+    ),
+    ("bench_realrolls.py", [], ["--sims", "200"]),
+    ("bench_basins.py", [], []),
+    ("bench_many_faces.py", [], ["--sims", "40"]),
+]
 
 
 def main() -> int:
@@ -40,7 +46,7 @@ def main() -> int:
     parser.add_argument("--quick", action="store_true", help="small sizes")
     args = parser.parse_args()
     failed = []
-    for script, (full, quick) in BENCHMARKS.items():
+    for script, full, quick in BENCHMARKS:
         cmd = [sys.executable, str(HERE / script), *(quick if args.quick else full)]
         print(f"\n=== {' '.join(cmd[1:])}", flush=True)
         start = time.perf_counter()
