@@ -1,12 +1,13 @@
 """Design a 4dF gem for a material: the fast model, corrected by simulations of the die in that fill.
 
 Run:  python benchmarks/design_for_fill.py --fill paper|print [--rounds 3] [--drops 20000] [--out templates]
+      [--physics PROFILE] [--model fast|basins] [--name NAME]
 
-Starts from the fast model's optimum for the fill (``diefab optimize
+Starts from the model's optimum for the fill (``diefab optimize
 fudge-gem-sim --fill FILL --model fast``) and repeats: drop the current die
 in pybullet with its fill (`--drops`, a new physics seed every round; the
-counts are appended to ``OUT/fudge-gem-FILL-rounds.jsonl``, or ``--rounds-file``),
-take the simulated face frequencies minus the fast model's probabilities
+counts are appended to ``OUT/NAME-rounds.jsonl``, or ``--rounds-file``),
+take the simulated face frequencies minus the model's probabilities
 (averaged over mirror-image faces) as a fixed correction, and re-fit the
 parameters to 4dF under the fast model plus that correction, from the
 current die.  Where the fast model's error changes slowly with the shape,
@@ -34,6 +35,15 @@ body's centre of mass, and a round whose body, recomputed now, has moved
 ``fudge-gem-FILL.toml`` (the fill's default settings: 160 g/m² card with
 glue tabs, or 0.4 mm nozzle, 2 perimeters, 0.2 mm layers, 4 top and bottom
 layers, 15 % infill).  Validate it on a fresh seed with ``diefab validate``.
+
+``--physics PROFILE`` drops every die under that physics profile (a shipped
+profile's name or a TOML file) and writes its ``[physics]`` table into the
+design, so that a plain ``diefab validate`` drops it so too; a round is
+pooled only with rounds of the same physics.  ``--model`` is the landing
+model the simulations correct: ``fast`` (default; learned on the default
+physics) or ``basins`` (the quasi-static model, which a die with a large
+quasi-static capture follows more closely).  ``--name`` names the design
+(default ``fudge-gem-FILL``).
 """
 
 from __future__ import annotations
@@ -47,11 +57,13 @@ from pathlib import Path
 import numpy as np
 
 from diefab.design import design_to_toml, load_design
-from diefab.fastmodel import fast_model
+from diefab.errors import PhysicsError
+from diefab.files import atomic_write
 from diefab.mass import Fill
-from diefab.models import FILL_MODELS, MODELS, to_values
+from diefab.models import FILL_MODELS, MODELS, face_probabilities, to_values
 from diefab.optimize import optimize_design
 from diefab.physics import simulate
+from diefab.profiles import load_profile, read_profile
 from diefab.readings import unreadable
 from diefab.stats import tvd
 
@@ -65,10 +77,10 @@ def symmetric(p: np.ndarray) -> np.ndarray:
     return out
 
 
-def pooled_frequencies(design, records: list[dict]) -> tuple[np.ndarray, np.ndarray, int]:
-    """Simulated face frequencies and the fast model's probabilities, pooled over `records` by drops; records used.
+def pooled_frequencies(design, records: list[dict], model: str = "fast") -> tuple[np.ndarray, np.ndarray, int]:
+    """Simulated face frequencies and `model`'s probabilities, pooled over `records` by drops; records used.
 
-    Each record is compared with the fast model at its own parameters; one
+    Each record is compared with `model` at its own parameters; one
     without a stored centre of mass, or whose centre no longer matches its
     body as computed now, is skipped (it was dropped with another body).
     """
@@ -79,13 +91,13 @@ def pooled_frequencies(design, records: list[dict]) -> tuple[np.ndarray, np.ndar
         if "center" not in r or not np.allclose(r["center"], body.center, rtol=0, atol=1e-9):
             continue
         counts = np.asarray(r["face_counts"], dtype=float)
-        p = fast_model(die.polyhedron, body.center, fill=die.fill, inertia=body.inertia / body.mass)
+        p = face_probabilities(die, model)
         q_sum, p_sum, n_sum, used = q_sum + counts, p_sum + counts.sum() * p, n_sum + counts.sum(), used + 1
     return q_sum / n_sum, p_sum / n_sum, used
 
 
-def refit_near(design, correction: np.ndarray, read_by, min_margin: float, max_step: float):
-    """The design nearest `design` whose corrected fast-model value probabilities fit 4dF (damped Gauss-Newton).
+def refit_near(design, correction: np.ndarray, read_by, min_margin: float, max_step: float, model: str = "fast"):
+    """The design nearest `design` whose corrected `model` value probabilities fit 4dF (damped Gauss-Newton).
 
     Least squares over the value probabilities plus a small pull towards the
     current parameters (it picks the nearest of the dice that fit equally
@@ -98,7 +110,7 @@ def refit_near(design, correction: np.ndarray, read_by, min_margin: float, max_s
     from diefab.optimize import Problem
 
     names = family(design.family).free_names(design.params)
-    problem = Problem(design, tuple(names), "fast", "tvd", min_margin, correction, tuple(read_by))
+    problem = Problem(design, tuple(names), model, "tvd", min_margin, correction, tuple(read_by))
     goal = design.target_distribution.aligned(design.support)
     x0 = problem.unit(design.params)
 
@@ -174,8 +186,14 @@ def main() -> None:
     ap.add_argument("--refit", choices=("optimum", "near", "simulated"), default="optimum",
                     help="re-fit to the corrected model's optimum, a damped step towards it, or a damped step "
                          "along the simulated slope")  # fmt: skip
+    ap.add_argument("--objective", choices=("eq2", "tvd"), default="eq2",
+                    help="--refit optimum: objective minimized (tvd: the measure validate reports)")  # fmt: skip
     ap.add_argument("--fd-step", type=float, default=0.05, help="--refit simulated: finite-difference step, unit cube")
     ap.add_argument("--max-step", type=float, default=0.05, help="--refit near: largest step, unit cube")
+    ap.add_argument("--physics", default=None,
+                    help="physics profile the die is dropped under and keeps as its [physics] table")  # fmt: skip
+    ap.add_argument("--model", choices=("fast", "basins"), default="fast", help="landing model the drops correct")
+    ap.add_argument("--name", default=None, help="design name (default fudge-gem-FILL)")
     ap.add_argument("--read-by", default="face,vertex",
                     help="reading conventions a value may use (net and stl mark faces and the gem's apex)")  # fmt: skip
     args = ap.parse_args()
@@ -186,26 +204,35 @@ def main() -> None:
         ap.error(f"--fd-step must be at most 0.5 (unit cube), got {args.fd_step}")
 
     read_by = tuple(args.read_by.split(","))
+    name = args.name or f"fudge-gem-{args.fill}"
+    physics = {}
+    if args.physics is not None:
+        try:
+            load_profile(args.physics)  # a bad setting stops here, before the first drop
+        except PhysicsError as exc:
+            ap.error(str(exc))
+        physics = read_profile(args.physics)[0]["physics"]
     base = load_design("fudge-gem-sim")
-    design = replace(base, name=f"fudge-gem-{args.fill}", fill=Fill(args.fill))
+    design = replace(base, name=name, fill=Fill(args.fill), physics=physics)
     goal = design.target_distribution.aligned(design.support)
     t0 = time.perf_counter()
     if args.start is not None:
         design = replace(design, params=load_design(args.start).params)
     else:
-        design = optimize_design(design, model="fast", min_margin=args.min_margin, starts=6, seed=0,
+        design = optimize_design(design, model=args.model, min_margin=args.min_margin, starts=6, seed=0,
                                  read_by=read_by).design  # fmt: skip
     print(f"start for {design.fill.describe()}: "
           + " ".join(f"{k}={v:.4f}" for k, v in design.params.items()), flush=True)  # fmt: skip
     correction = np.zeros(len(design.polyhedron.faces))
     history = []
-    rounds_file = args.rounds_file or args.out / f"fudge-gem-{args.fill}-rounds.jsonl"  # one simulation a line
+    rounds_file = args.rounds_file or args.out / f"{name}-rounds.jsonl"  # one simulation a line
 
     def drop(die, seed: int) -> np.ndarray:
         """Face counts of `die` dropped `--drops` times with `seed`, kept in the rounds file."""
         result = simulate(die, args.drops, seed=seed, workers=args.workers)
         with rounds_file.open("a", encoding="utf-8") as f:
-            f.write(json.dumps({"fill": die.fill.to_mapping(), "params": dict(die.params), "drops": args.drops,
+            f.write(json.dumps({"fill": die.fill.to_mapping(), "physics": physics, "params": dict(die.params),
+                                "drops": args.drops,
                                 "seed": seed, "face_counts": result.face_counts.tolist(),
                                 "cocked": result.cocked, "unsettled": result.unsettled,
                                 "center": die.mass_properties().center.tolist()}) + "\n")  # fmt: skip
@@ -214,24 +241,24 @@ def main() -> None:
     for k in range(args.rounds):
         counts = drop(design, args.seed + k)
         kept = [r for r in map(json.loads, rounds_file.read_text(encoding="utf-8").splitlines())
-                if r["fill"] == design.fill.to_mapping()
+                if r["fill"] == design.fill.to_mapping() and r.get("physics", {}) == physics
                 and (args.pool == "fill" or r["params"] == dict(design.params))
                 and max(abs(r["params"][n] - v) for n, v in design.params.items()) <= args.pool_radius]  # fmt: skip
-        q, p, used = pooled_frequencies(design, kept)
+        q, p, used = pooled_frequencies(design, kept, args.model)
         sim_tvd = tvd(to_values(design, counts / counts.sum()), goal)  # this round's drops alone
         if unreadable(design.polyhedron, design.values, tuple(design.labels), read_by) is None:
             history.append((dict(design.params), sim_tvd))  # only a die that reads as made can be the answer
-        here = design.mass_properties()
-        alone = fast_model(design.polyhedron, here.center, fill=design.fill, inertia=here.inertia / here.mass)
+        alone = face_probabilities(design, args.model)
         print(f"round {k + 1}: simulated TVD {sim_tvd:.4f} ({args.drops} drops, seed {args.seed + k}); "
-              f"fast model alone {tvd(to_values(design, alone), goal):.4f}; correction from "
+              f"{args.model} model alone {tvd(to_values(design, alone), goal):.4f}; correction from "
               f"{used} simulations; {time.perf_counter() - t0:.0f} s", flush=True)  # fmt: skip
         correction = symmetric(q - p)
         if k == args.rounds - 1:
             break
 
         def corrected(poly, center, *, fill=None, inertia=None, r=correction):
-            out = np.clip(fast_model(poly, center, fill=fill, inertia=inertia) + r, 0, None)
+            extra = {"fill": fill, "inertia": inertia} if args.model in FILL_MODELS else {}
+            out = np.clip(MODELS[args.model](poly, center, **extra) + r, 0, None)
             return out / out.sum()
 
         if args.refit == "simulated":
@@ -240,35 +267,38 @@ def main() -> None:
             print("  step: " + " ".join(f"{k}={v:.4f}" for k, v in design.params.items()), flush=True)
             continue
         if args.refit == "near":
-            design = refit_near(design, correction, read_by, args.min_margin, args.max_step)
+            design = refit_near(design, correction, read_by, args.min_margin, args.max_step, args.model)
             print("  step: " + " ".join(f"{k}={v:.4f}" for k, v in design.params.items()), flush=True)
             continue
-        MODELS["fast-corrected"] = corrected
-        FILL_MODELS.add("fast-corrected")
+        MODELS["corrected"] = corrected
+        FILL_MODELS.add("corrected")
         try:
-            fit = optimize_design(design, model="fast-corrected", min_margin=args.min_margin, starts=0, seed=0,
-                                  read_by=read_by)  # fmt: skip
+            fit = optimize_design(design, model="corrected", objective=args.objective, min_margin=args.min_margin,
+                                  starts=0, seed=0, read_by=read_by)  # fmt: skip
         finally:
-            del MODELS["fast-corrected"]
-            FILL_MODELS.discard("fast-corrected")
-        design = replace(fit.design, name=f"fudge-gem-{args.fill}")
+            del MODELS["corrected"]
+            FILL_MODELS.discard("corrected")
+        design = replace(fit.design, name=name)
         print("  refit: " + " ".join(f"{k}={v:.4f}" for k, v in design.params.items()), flush=True)
     if not history:
         raise SystemExit(f"no round's die reads by {args.read_by}: nothing written")
     best_params, best_tvd = min(history, key=lambda h: h[1])
+    under = f" under the physics profile {args.physics}" if args.physics else ""
     final = replace(
         design.with_params(**best_params),
-        description=f"4dF gem designed for {design.fill.describe()} (fast model corrected by simulation)",
+        description=f"4dF gem designed for {design.fill.describe()}{under} "
+        f"({args.model} model corrected by simulation)",
     )
-    start = f" --start {args.start}" if args.start else ""
+    options = "".join(f" --{k} {v}" for k, v in (("physics", args.physics), ("name", args.name),
+                                                 ("start", args.start)) if v is not None)  # fmt: skip
     comment = (
         f"Written by: python benchmarks/design_for_fill.py --fill {args.fill} --rounds {args.rounds} "
         f"--drops {args.drops} --seed {args.seed} --pool {args.pool} --pool-radius {args.pool_radius:g} "
-        f"--refit {args.refit} --max-step {args.max_step:g} --fd-step {args.fd_step:g}{start}\n"
-        f"simulated TVD {best_tvd:.4f} in its round"
+        f"--refit {args.refit} --objective {args.objective} --max-step {args.max_step:g} --fd-step {args.fd_step:g} "
+        f"--min-margin {args.min_margin:g} --model {args.model}"
+        f"{options}\nsimulated TVD {best_tvd:.4f} in its round"
     )
-    path = args.out / f"{final.name}.toml"
-    path.write_text(design_to_toml(final, comment=comment), encoding="utf-8")
+    path = atomic_write(args.out / f"{final.name}.toml", design_to_toml(final, comment=comment))
     print(f"wrote {path} (the round with the lowest simulated TVD, {best_tvd:.4f})")
 
 

@@ -63,3 +63,41 @@ def test_step_along_the_simulated_slope_lowers_the_tvd(script):
     after = tvd(to_values(moved, fast_probabilities(moved)), goal)
     step = np.array([moved.params[k] - die.params[k] for k in die.params])
     assert np.abs(step).max() > 0 and after < before
+
+
+def test_pool_compares_with_the_chosen_model(script):
+    """With --model basins the pooled model probabilities are the basins model's, weighted by drops."""
+    from diefab.models import face_probabilities
+
+    die = load_design("fudge-gem-sim")
+    other = die.with_params(c=die.params["c"] + 0.03)
+    counts = np.arange(1, 10) * 10
+    q, p, used = script.pooled_frequencies(die, [record(die, counts), record(other, 3 * counts)], "basins")
+    assert used == 2
+    want = (face_probabilities(die, "basins") + 3 * face_probabilities(other, "basins")) / 4
+    np.testing.assert_allclose(p, want)
+    assert abs(p.sum() - 1) < 1e-12
+
+
+def test_near_refit_with_the_basins_model_lowers_its_tvd(script):
+    """With no correction, the damped step must bring the basins model's value probabilities nearer 4dF."""
+    from diefab.models import face_probabilities
+
+    die = load_design("fudge-gem-sim")
+    goal = die.target_distribution.aligned(die.support)
+    zero = np.zeros(len(die.polyhedron.faces))
+    moved = script.refit_near(die, zero, ("face", "vertex"), 0.05, 0.05, "basins")
+    before = tvd(to_values(die, face_probabilities(die, "basins")), goal)
+    after = tvd(to_values(moved, face_probabilities(moved, "basins")), goal)
+    assert moved.params != die.params and after < before
+    assert moved.margins()[moved.resting_mask()].min() > 0.05
+
+
+def test_printed_table_gem_keeps_the_profile_and_stands(script):
+    """The shipped printed-table gem carries printed-table's physics, so a plain validate drops it so."""
+    from diefab.profiles import read_profile
+
+    die = load_design("fudge-gem-print-table")
+    assert dict(die.physics) == read_profile("printed-table")[0]["physics"]
+    assert die.fill.kind == "print" and die.fill.to_mapping() == load_design("fudge-gem-print").fill.to_mapping()
+    assert die.margins()[die.resting_mask()].min() >= 0.05  # as made, engraved labels included
