@@ -34,6 +34,7 @@ Examples
 
 from __future__ import annotations
 
+import contextlib
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
@@ -162,6 +163,9 @@ def candidates(target: Target, faces: int | None = None, family: str | None = No
         found = [c for c in found if c.family == family]
         if not found and faces is not None:
             found = [_forced(family, faces, asym)]
+        elif not found:  # a family none of the above suggests: its member with one face per value, if any
+            with contextlib.suppress(DesignError):
+                found = [_forced(family, k, asym)]
     if faces is not None:
         found = [c for c in found if c.faces == faces] or ([_forced(family, faces, asym)] if family else [])
         if faces < k:
@@ -214,6 +218,8 @@ def _forced(family: str, faces: int, asym: dict[str, float]) -> Candidate:
     if family in ("bipyramid", "trapezohedron") and faces % 2 == 0 and 6 <= faces <= 24:
         params = {"h": 1.2, "g": 1.0} if family == "bipyramid" else {"t": 0.7, "u": 0.8}
         return Candidate(family, {"n": faces // 2, **params}, faces)
+    if family == "gem" and faces == 9:
+        return Candidate("gem", {"a": 1.3, "b": 0.6, "c": 0.5, "d": 1.5}, 9)
     if family == "cuboid" and faces == 6:
         return Candidate("cuboid", {"x": 1.0, "z": 0.9, "t": 0.1}, 6)
     if family == "freeform" and 6 <= faces <= 30:

@@ -25,6 +25,10 @@ def test_candidates_carry_every_value():
             c.polyhedron()  # every starting shape is a valid die
     assert {c.family for c in candidates(parse_target("1:3,2:3,3:3,4:3,5:3,6:5"))} >= {"cuboid", "ngem"}
     assert [c.faces for c in candidates(parse_target("2d6"), faces=13, family="ngem")] == [13]
+    # a family no target-driven rule proposes still gives its member with one face per value
+    assert [(c.family, c.faces) for c in candidates(parse_target("4df"), family="gem")] == [("gem", 9)]
+    with pytest.raises(DesignError, match="no family gem fits"):
+        candidates(parse_target("2d6"), family="gem")
     with pytest.raises(DesignError, match="fewer than"):
         candidates(parse_target("2d6"), faces=7)
     with pytest.raises(DesignError, match="unknown family"):
