@@ -46,7 +46,8 @@ from typing import Any
 import numpy as np
 
 from .design import Design
-from .errors import DiefabError, StatsError
+from .errors import DiefabError, PhysicsError, StatsError
+from .physics import MAX_DROPS
 from .simopt import RUN_FORMAT, RunError, RunLog
 
 __all__ = [
@@ -358,6 +359,12 @@ class CalibrationSpec:
         for name, (lo, hi) in zip(self.names, self.bounds):
             if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
                 bad(f"bounds of {name} [{lo}, {hi}] must be finite with low < high")
+        for name, (lo, hi) in zip(self.names, self.bounds):
+            for end in (lo, hi):  # each setting is monotonic in its parameter: the ends decide
+                try:
+                    settings_at(self.base, [name], [end])
+                except PhysicsError as exc:
+                    bad(f"bounds of {name} [{lo:g}, {hi:g}] reach beyond what the physics takes: {exc}")
         for name in ("seed", "sims_per_eval", "max_sims"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
@@ -366,6 +373,9 @@ class CalibrationSpec:
             bad(f"seed={self.seed} must be >= 0")
         if not 1 <= self.sims_per_eval <= self.max_sims:
             bad(f"drops per evaluation {self.sims_per_eval} must be >= 1 and <= max {self.max_sims}")
+        for key, value in (("drops per evaluation", self.sims_per_eval), ("most drops per evaluation", self.max_sims)):
+            if value > MAX_DROPS:
+                bad(f"{key} {value} must be at most {MAX_DROPS:,}")
         if self.method not in ("cma", "nm", "grid"):
             bad(f"method={self.method!r} must be cma, nm or grid")
         if isinstance(self.grid_points, bool) or not isinstance(self.grid_points, (int, np.integer)):
@@ -414,11 +424,13 @@ class CalibrationSpec:
     def from_json(cls, text: str, source: str = "run.json") -> CalibrationSpec:
         try:
             data = json.loads(text)
+            if not isinstance(data, dict) or data.get("objective") != "deviance":
+                optimize = isinstance(data, dict) and "objective" in data
+                raise ValueError("it is an optimize run (continue it with diefab optimize --resume)" if optimize
+                                 else "it describes no calibration")  # fmt: skip
             data["dice"], data["names"] = tuple(data["dice"]), tuple(data["names"])
             data["bounds"] = tuple((float(lo), float(hi)) for lo, hi in data["bounds"])
             data["x0"] = tuple(float(v) for v in data["x0"])
-            if data.get("objective") != "deviance":
-                raise ValueError("not a calibration run")
             return cls(**data)
         except (ValueError, KeyError, TypeError) as exc:
             raise RunError(f"{source} is not a diefab calibration run: {exc}") from None
@@ -428,11 +440,26 @@ class CalibrationLog(RunLog):
     """A calibration run folder: ``run.json`` (:class:`CalibrationSpec`) and ``evaluations.jsonl``."""
 
     def spec(self) -> CalibrationSpec:
-        if not self.folder.is_dir():
-            raise RunError(f"resume folder {self.folder} does not exist")
-        if not self.spec_path.is_file() or not self.path.is_file():
-            raise RunError(f"{self.folder} is not a diefab run folder (no run.json or evaluations.jsonl)")
-        return CalibrationSpec.from_json(self.spec_path.read_text(encoding="utf-8"), str(self.spec_path))
+        return CalibrationSpec.from_json(self.spec_text(), str(self.spec_path))
+
+    def read(self) -> tuple[list[dict[str, Any]], str | None]:
+        """The logged records (see :meth:`RunLog.read`); a simulated record must hold counts for every die."""
+        records, warning = super().read()
+        sizes = [len(d["counts"]) for d in self.spec().dice]
+        for number, record in enumerate(records, start=1):
+            dice = record.get("dice") if record["feasible"] else []
+            ok = isinstance(dice, list) and (not record["feasible"] or len(dice) == len(sizes))
+            ok = ok and all(isinstance(d, dict) and _is_counts(d.get("counts"), k) for d, k in zip(dice, sizes))
+            if not ok:
+                raise RunError(f"{self.path} line {number} is corrupt (not the counts of this run's dice); the run "
+                               "cannot be resumed")  # fmt: skip
+        return records, warning
+
+
+def _is_counts(value: Any, k: int) -> bool:
+    """True when `value` is a list of `k` whole numbers >= 0 (JSON)."""
+    return (isinstance(value, list) and len(value) == k
+            and all(isinstance(c, int) and not isinstance(c, bool) and c >= 0 for c in value))  # fmt: skip
 
 
 def make_spec(
@@ -455,6 +482,9 @@ def make_spec(
     unknown = [n for n in list(free) + list(bounds) if n not in PARAMETERS]
     if unknown:
         raise CalibrationError(f"{unknown[0]!r} is not a calibration parameter (parameters: {', '.join(PARAMETERS)})")
+    fixed = [n for n in bounds if n not in free]
+    if fixed:
+        raise CalibrationError(f"bounds given for {fixed[0]!r}, which is not fitted (free: {', '.join(free)})")
     box = []
     for name in free:
         lo, hi = bounds.get(name, (PARAMETERS[name].low, PARAMETERS[name].high))

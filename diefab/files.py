@@ -22,6 +22,7 @@ from __future__ import annotations
 import contextlib
 import os
 import re
+import signal
 import tempfile
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -71,12 +72,49 @@ def ensure_dir(path: str | Path) -> Path:
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
+        blocking = next((p for p in (path, *path.parents) if p.exists() and not p.is_dir()), None)
+        if blocking is not None:  # mkdir's "File exists" or "Not a directory" would not say which
+            raise OutputError(f"cannot create output folder {path}: {blocking} is a file, not a folder") from exc
         raise OutputError(f"cannot create output folder {path}: {exc.strerror or exc}") from exc
     if not path.is_dir():
         raise OutputError(f"output path {path} is not a folder")
     if not os.access(path, os.W_OK | os.X_OK):
         raise OutputError(f"output folder {path} is not writable")
     return path
+
+
+#: The signals that stop a command (the command line turns each into a clean exit).
+STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
+@contextlib.contextmanager
+def signals_deferred():
+    """Defer Ctrl-C, SIGTERM and SIGHUP to the end of the block, then deliver them as they would have been.
+
+    Python runs signal handlers in the main thread whichever thread the
+    signal arrives in (a BLAS thread may take a ``kill``), so the handlers
+    are swapped for ones that only note the signal, rather than the signals
+    masked.  Signals that are ignored stay ignored; off the main thread
+    nothing changes.
+    """
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    noted: list[int] = []
+    previous = {}
+    for signum in STOP_SIGNALS:
+        handler = signal.getsignal(signum)
+        if handler is not signal.SIG_IGN and handler is not None:  # None: set outside Python, left alone
+            previous[signum] = signal.signal(signum, lambda s, frame: noted.append(s))
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        for signum in dict.fromkeys(noted):
+            signal.raise_signal(signum)
 
 
 def atomic_write(path: str | Path, data: str | bytes, *, inputs: Iterable[str | Path] = ()) -> Path:
@@ -104,7 +142,16 @@ def write_files(files: Mapping[str | Path, str | bytes], *, inputs: Iterable[str
     OutputError
         A target is an input, a folder, or cannot be written; no target has
         changed.
+
+    Ctrl-C, SIGTERM and SIGHUP are deferred while the files are written and
+    delivered just after, so that an interrupt leaves the targets all old or
+    all new and no temporary file behind.
     """
+    with signals_deferred():
+        return _write_files(files, inputs)
+
+
+def _write_files(files: Mapping[str | Path, str | bytes], inputs: Iterable[str | Path]) -> list[Path]:
     targets = [Path(p) for p in files]
     payloads = [d.encode("utf-8") if isinstance(d, str) else bytes(d) for d in files.values()]
     if len(set(map(os.path.abspath, targets))) != len(targets):

@@ -193,17 +193,20 @@ class PhysicsSettings:
         c("collision_margin", self.collision_margin, 0 <= self.collision_margin <= 0.1, "in [0, 0.1] model units")
         c("gravity", self.gravity, 0 < self.gravity <= 1000, "in (0, 1000] units/s²")
         c("drop_height", self.drop_height, 0 < self.drop_height <= 1000, "in (0, 1000] model units")
-        c("height_jitter", self.height_jitter, 0 <= self.height_jitter < self.drop_height, "in [0, drop_height)")
+        c("height_jitter", self.height_jitter, 0 <= self.height_jitter < self.drop_height,
+          f"in [0, drop_height={self.drop_height:g})")  # fmt: skip
         for name, top in (("angular_velocity", 1000.0), ("linear_velocity", 100.0)):
             lo, hi = getattr(self, name)
             c(name, [lo, hi], 0 <= lo <= hi <= top, f"a range [min, max] with 0 <= min <= max <= {top:g}")
         c("still_speed", self.still_speed, self.still_speed > 0, "> 0 units/s")
         c("still_spin", self.still_spin, self.still_spin > 0, "> 0 rad/s")
         c("settle_time", self.settle_time, 0 <= self.settle_time <= 10, "in [0, 10] seconds")
-        c("cocked_time", self.cocked_time, self.settle_time <= self.cocked_time <= 60, "in [settle_time, 60] seconds")
+        c("cocked_time", self.cocked_time, self.settle_time <= self.cocked_time <= 60,
+          f"in [settle_time={self.settle_time:g}, 60] seconds")  # fmt: skip
         c("energy_fraction", self.energy_fraction, 0 <= self.energy_fraction < 1, "in [0, 1)")
         c("capture_energy", self.capture_energy, 0 <= self.capture_energy <= 100, "in [0, 100] (units of m g L)")
-        c("time_limit", self.time_limit, self.cocked_time < self.time_limit <= 600, "in (cocked_time, 600] seconds")
+        c("time_limit", self.time_limit, self.cocked_time < self.time_limit <= 600,
+          f"in (cocked_time={self.cocked_time:g}, 600] seconds")  # fmt: skip
         c("face_tolerance", self.face_tolerance, 0 < self.face_tolerance < 45, "in (0, 45) degrees")
 
     @classmethod

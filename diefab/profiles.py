@@ -91,6 +91,10 @@ def read_profile(spec) -> tuple[dict[str, Any], str]:
         raise PhysicsError(f"{source}: unknown key {unknown[0]!r} (keys: {', '.join(PROFILE_KEYS)})")
     if not isinstance(data.get("physics"), dict):
         raise PhysicsError(f"{source}: needs a [physics] table of settings")
+    for key, kind, what in (("name", str, "a string"), ("description", str, "a string"),
+                            ("calibration", dict, "a table")):  # fmt: skip
+        if key in data and not isinstance(data[key], kind):
+            raise PhysicsError(f"{source}: {key} = {data[key]!r} is not {what}")
     return data, source
 
 

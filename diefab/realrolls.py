@@ -191,32 +191,139 @@ def grouped_tvd(p, q, outcomes, groups) -> float:
     return best
 
 
+def _finite(where: str, value) -> None:
+    """A finite number of any magnitude (volumes in mm³ and inertias in mm⁵ exceed a design file's 1e6)."""
+    from .schema import _fail
+
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        _fail(where, value, "a number")
+    if not math.isfinite(value):
+        raise DesignError(f"{where} = {value!r} is not a finite number")
+
+
+def _count(where: str, value) -> None:
+    from .schema import _fail
+    from .stats import MAX_COUNT
+
+    if isinstance(value, bool) or not isinstance(value, int):
+        _fail(where, value, "an integer")
+    if not 0 <= value <= MAX_COUNT:
+        raise DesignError(f"{where} = {value} is not a number of rolls in [0, {MAX_COUNT:.0e}]")
+
+
+def _fields() -> dict:
+    """Top-level key of a real-rolls file -> the check of its value (:mod:`diefab.schema`'s checks)."""
+    from .schema import array, index, integer, point, record, table, text, word
+
+    prediction = array(_finite, least=1)
+    return {
+        "shape": word,
+        "description": text,
+        "physical": record(outcomes=array(integer, least=1), counts=array(_count, least=1)),
+        "their_model_and_sims": record(ours=prediction, bullet=prediction, ipc=prediction),
+        "geometry": record(hull_vertices=array(point, least=4), hull_faces=array(array(index, length=3), least=4)),
+        "fabricated_body": record(volume=_finite, com=point,
+                                  inertia_about_com_unit_density=array(array(_finite, length=3), length=3)),
+        "outcome_faces": table(array(index)),
+        "outcome_stable_faces": table(array(index)),
+        "ambiguous_groups": array(array(integer, least=2)),
+    }  # fmt: skip
+
+
+#: Keys a real-rolls file must have (dotted: a key of a table).
+REQUIRED = ("physical.outcomes", "physical.counts", "geometry.hull_vertices", "geometry.hull_faces",
+            "fabricated_body.com", "fabricated_body.inertia_about_com_unit_density", "fabricated_body.volume",
+            "outcome_faces", "outcome_stable_faces")  # fmt: skip
+
+
+def _check_data(data) -> None:
+    """Raise :class:`DesignError` naming the field unless `data` is a real-rolls die diefab can use."""
+    from .schema import _kind
+    from .stats import MAX_COUNT
+
+    if not isinstance(data, dict):
+        raise DesignError(f"holds {'null' if data is None else _kind(data)}, not a JSON object")
+    fields = _fields()
+    for key, value in data.items():
+        if key in fields:
+            fields[key](key, value)
+    for key in REQUIRED:
+        node = data
+        for part in key.split("."):
+            if not isinstance(node, dict) or part not in node:
+                raise DesignError(f"no {key}")
+            node = node[part]
+    phys = data["physical"]
+    outcomes, counts = phys["outcomes"], phys["counts"]
+    if len(counts) != len(outcomes):
+        raise DesignError(f"physical.counts has {len(counts)} items for the {len(outcomes)} physical.outcomes")
+    if len(set(outcomes)) != len(outcomes):
+        raise DesignError(f"physical.outcomes = {outcomes} names an outcome twice")
+    if sum(counts) > MAX_COUNT:
+        raise DesignError(f"physical.counts add up to {sum(counts):.3g}, more than the {MAX_COUNT:.0e} rolls diefab "
+                          "can count")  # fmt: skip
+    geo = data["geometry"]
+    n_vertices, n_faces = len(geo["hull_vertices"]), len(geo["hull_faces"])
+    for i, tri in enumerate(geo["hull_faces"]):
+        if max(tri) >= n_vertices:
+            raise DesignError(f"geometry.hull_faces[{i}] = {tri} names a vertex beyond the {n_vertices} hull_vertices")
+    if data["fabricated_body"]["volume"] <= 0:
+        raise DesignError(f"fabricated_body.volume = {data['fabricated_body']['volume']!r} is not a positive number")
+    for key in ("outcome_faces", "outcome_stable_faces"):
+        for outcome, faces in data[key].items():
+            if not outcome.lstrip("-").isdigit() or int(outcome) not in outcomes:
+                raise DesignError(f"{key} has key {outcome!r}, which is not one of physical.outcomes {outcomes}")
+            if faces and max(faces) >= n_faces:
+                raise DesignError(f"{key}.{outcome} names triangle {max(faces)} beyond the {n_faces} hull_faces")
+    if not any(data["outcome_stable_faces"].values()):
+        raise DesignError("outcome_stable_faces names no triangle the die rests on")
+    for i, group in enumerate(data.get("ambiguous_groups", [])):
+        if not set(group) <= set(outcomes):
+            raise DesignError(f"ambiguous_groups[{i}] = {group} names a value that is not one of physical.outcomes")
+    for key, p in data.get("their_model_and_sims", {}).items():
+        if key in ("ours", "bullet", "ipc") and (len(p) != len(outcomes) or min(p) < 0 or sum(p) <= 0):
+            raise DesignError(f"their_model_and_sims.{key} is not a distribution over the {len(outcomes)} outcomes")
+
+
 def load_real_rolls(path: str | Path) -> RealRolls:
-    """Read one die of the real-rolls data (a JSON file)."""
+    """Read one die of the real-rolls data (a JSON file).
+
+    Raises
+    ------
+    DesignError
+        The file is not a regular file, not UTF-8 JSON, or a field has the
+        wrong type, is missing or disagrees with another (counts for every
+        outcome, triangles of the hull, outcomes that exist); the message
+        names the file and the field.
+    """
     path = Path(path)
+    if not path.is_file():
+        raise DesignError(f"real rolls {path} {'is not a regular file' if path.exists() else 'does not exist'}")
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
-        phys, geo = data["physical"], data["geometry"]
-        outcomes = tuple(int(o) for o in phys["outcomes"])
-        reference = {}
-        for key in ("ours", "bullet", "ipc"):
-            if key in data.get("their_model_and_sims", {}):
-                r = np.array(data["their_model_and_sims"][key], dtype=float)
-                reference[key] = r / r.sum()
-        body = data["fabricated_body"]
-        return RealRolls(
-            name=str(data.get("shape", path.stem)),
-            outcomes=outcomes,
-            counts=np.array(phys["counts"], dtype=np.int64),
-            groups=tuple(tuple(int(o) for o in g) for g in data.get("ambiguous_groups", [])),
-            reference=reference,
-            hull_vertices=np.array(geo["hull_vertices"], dtype=float),
-            hull_faces=np.array(geo["hull_faces"], dtype=np.intp),
-            outcome_faces={int(k): list(v) for k, v in data["outcome_faces"].items()},
-            outcome_stable_faces={int(k): list(v) for k, v in data["outcome_stable_faces"].items()},
-            center_of_mass=np.array(body["com"], dtype=float),
-            inertia=np.array(body["inertia_about_com_unit_density"], dtype=float) / float(body["volume"]),
-            description=str(data.get("description", "")),
-        )
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError, KeyError, TypeError, ValueError) as exc:
-        raise DesignError(f"cannot read real rolls {path}: {exc}") from exc
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise DesignError(f"cannot read real rolls {path}: {exc}") from None
+    try:
+        _check_data(data)
+    except DesignError as exc:
+        raise DesignError(f"real rolls {path}: {exc}") from None
+    phys, geo, body = data["physical"], data["geometry"], data["fabricated_body"]
+    reference = {}
+    for key in ("ours", "bullet", "ipc"):
+        if key in data.get("their_model_and_sims", {}):
+            r = np.array(data["their_model_and_sims"][key], dtype=float)
+            reference[key] = r / r.sum()
+    return RealRolls(
+        name=str(data.get("shape", path.stem)),
+        outcomes=tuple(phys["outcomes"]),
+        counts=np.array(phys["counts"], dtype=np.int64),
+        groups=tuple(tuple(g) for g in data.get("ambiguous_groups", [])),
+        reference=reference,
+        hull_vertices=np.array(geo["hull_vertices"], dtype=float),
+        hull_faces=np.array(geo["hull_faces"], dtype=np.intp),
+        outcome_faces={int(k): list(v) for k, v in data["outcome_faces"].items()},
+        outcome_stable_faces={int(k): list(v) for k, v in data["outcome_stable_faces"].items()},
+        center_of_mass=np.array(body["com"], dtype=float),
+        inertia=np.array(body["inertia_about_com_unit_density"], dtype=float) / float(body["volume"]),
+        description=str(data.get("description", "")),
+    )

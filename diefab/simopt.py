@@ -51,7 +51,7 @@ from typing import Any
 import numpy as np
 
 from .design import Design
-from .errors import DesignError, DiefabError
+from .errors import DesignError, DiefabError, OutputError
 from .files import atomic_write
 from .geometry import face_margins
 from .optimize import INFEASIBLE, INVALID, OBJECTIVES, Problem, _outside, _polyhedron, candidate_mass
@@ -209,6 +209,8 @@ class RunSpec:
     def from_json(cls, text: str, source: str = "run.json") -> RunSpec:
         try:
             data = json.loads(text)
+            if isinstance(data, dict) and data.get("objective") == "deviance":
+                raise ValueError("it is a calibration run (continue it with diefab calibrate --resume)")
             data["names"], data["x0"] = tuple(data["names"]), tuple(float(v) for v in data["x0"])
             data["robust"] = tuple(data.get("robust", ()))
             return cls(**data)
@@ -710,11 +712,16 @@ class RunLog:
                 self.folder.rmdir()
 
     def spec(self) -> RunSpec:
+        return RunSpec.from_json(self.spec_text(), str(self.spec_path))
+
+    def spec_text(self) -> str:
+        """The text of ``run.json``, once the folder is known to hold a run."""
         if not self.folder.is_dir():
-            raise RunError(f"resume folder {self.folder} does not exist")
+            state = "is not a folder" if self.folder.exists() else "does not exist"
+            raise RunError(f"resume folder {self.folder} {state}")
         if not self.spec_path.is_file() or not self.path.is_file():
             raise RunError(f"{self.folder} is not a diefab run folder (no run.json or evaluations.jsonl)")
-        return RunSpec.from_json(self.spec_path.read_text(encoding="utf-8"), str(self.spec_path))
+        return self.spec_path.read_text(encoding="utf-8")
 
     def read(self) -> tuple[list[dict[str, Any]], str | None]:
         """The logged records, and a warning if a torn last line was skipped.
@@ -749,7 +756,7 @@ class RunLog:
     def open(self) -> None:
         """Open for appending, cutting off a torn last line first (call :meth:`read` before)."""
         good = getattr(self, "_good", None)
-        fh = open(self.path, "r+b")  # noqa: SIM115 -- kept open for the run, closed by close()
+        fh = open(self.path, "r+b", buffering=0)  # noqa: SIM115 -- kept open for the run, closed by close()
         if good is not None:
             fh.truncate(good)
             fh.seek(good)
@@ -760,10 +767,25 @@ class RunLog:
         self._fh = fh
 
     def append(self, record: dict[str, Any]) -> None:
-        line = json.dumps(record, separators=(",", ":"), allow_nan=False).encode() + b"\n"
-        self._fh.write(line)
-        self._fh.flush()
-        os.fsync(self._fh.fileno())
+        """Log `record` as one line, on disk when this returns.
+
+        Raises
+        ------
+        OutputError
+            The line could not be written (a full disk); the log is cut back
+            to the lines before it, so the run can be resumed.
+        """
+        line = memoryview(json.dumps(record, separators=(",", ":"), allow_nan=False).encode() + b"\n")
+        start = self._fh.tell()
+        try:
+            while line:  # an unbuffered write may take part of the line
+                line = line[self._fh.write(line) :]
+            os.fsync(self._fh.fileno())
+        except OSError as exc:
+            with contextlib.suppress(OSError):
+                self._fh.truncate(start)
+                self._fh.seek(start)
+            raise OutputError(f"cannot write {self.path}: {exc.strerror or exc}") from exc
 
     def close(self) -> None:
         if self._fh is not None:

@@ -317,6 +317,8 @@ def synthesize(
     fill = fill or Fill()
     say = progress or (lambda text: None)
     t0 = time.monotonic()
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise DesignError(f"seed={seed!r} must be an integer >= 0")
     final_model = RANK_MODEL if model == "simulation" else model
     if final_model not in MODELS:
         raise DesignError(f"model {model!r} is not available (models: {', '.join([*MODELS, 'simulation'])})")

@@ -30,18 +30,30 @@ CUBE = tomllib.loads(Path(str(template_path("d6"))).read_text())
 BASES = {"gem": GEM, "cube": CUBE, "mesh": {"name": "m", "family": "mesh", "target": "uniform:6", "mesh": "m.stl"}}
 
 
+_DROP = object()  # a value that removes its key
+
+
+def _set(data, key: str, value):
+    """`data` with `key` (dotted: ``params.a``, ``vertices.0.1``; empty: the whole) set to `value` (or dropped)."""
+    if not key:
+        return value
+    *parents, last = key.split(".")
+    node = data
+    for part in parents:
+        node = node[int(part)] if isinstance(node, list) else node.setdefault(part, {})
+    if value is _DROP:
+        del node[last]
+    elif isinstance(node, list):
+        node[int(last)] = value
+    else:
+        node[last] = value
+    return data
+
+
 def _design(tmp_path: Path, base: str, key: str | None = None, value=None) -> Path:
-    """The base design with `key` (dotted: ``params.a``, ``vertices.0.1``) set to `value`, as a file."""
+    """The base design with `key` set to `value` (:func:`_set`), as a file."""
     data = json.loads(json.dumps(BASES[base]))
-    if key is not None:
-        *parents, last = key.split(".")
-        node = data
-        for part in parents:
-            node = node[int(part)] if isinstance(node, list) else node.setdefault(part, {})
-        if isinstance(node, list):
-            node[int(last)] = value
-        else:
-            node[last] = value
+    data = _set(data, key, value) if key is not None else data
     path = tmp_path / "design.toml"
     path.write_text(tomli_w.dumps(data))
     return path
@@ -240,6 +252,12 @@ BAD_ARGS = [
     (["optimize", "fudge-gem", "--model", "simulation", "--resume", "/nonexistent"], "does not exist"),
     (["validate", "fudge-gem", "--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "--workers does not apply"),
     (["validate", "fudge-gem", "--seed", "-1"], "--seed"),
+    (["design", "4df", "--seed", "-1"], "--seed"),  # it used to be an internal error
+    (["predict", "fudge-gem", "--fill", "paper", "--nozzle", "0.5"], "--nozzle applies only to --fill print"),
+    (["predict", "fudge-gem", "--card", "200"], "--card applies only to --fill paper (the fill is solid)"),
+    (["validate", "fudge-gem", "--fill", "print", "--glue", "5"], "--glue applies only to --fill paper"),
+    (["optimize", "fudge-gem", "--infill", "0.3"], "--infill applies only to --fill print"),
+    (["design", "4df", "--fill", "paper", "--nozzle", "0.4"], "--nozzle applies only to --fill print"),
 ]  # fmt: skip
 
 
@@ -578,3 +596,368 @@ def test_a_full_disk_under_stdout_is_one_line(tmp_path):
                               stderr=subprocess.PIPE, text=True, timeout=120)  # fmt: skip
     assert proc.returncode == 2
     assert proc.stderr.strip().splitlines() == ["diefab: error: No space left on device"]
+
+
+# ----------------------------------------------------------------------
+# the real-rolls reader: every field checked and named, never a traceback
+
+REALROLLS = Path("/work/shared/realrolls/binom2.json")
+
+BAD_REALROLLS = [
+    # (dotted key, wrong value, words of the one-line error)
+    ("physical.counts", [5.5, 10, 10], "physical.counts[0] = 5.5 is a float, not an integer"),
+    ("physical.counts", [True, 10, 10], "physical.counts[0] = true is a boolean"),
+    ("physical.counts", ["5", 10, 10], "physical.counts[0] = '5' is a string"),
+    ("physical.counts", [-5, 10, 10], "physical.counts[0] = -5 is not a number of rolls"),
+    ("physical.counts", [10**30, 10, 10], "is not a number of rolls in [0, 1e+15]"),
+    ("physical.counts", [10**15, 10**15, 10], "more than the 1e+15"),
+    ("physical.counts", [5, 10], "physical.counts has 2 items for the 3 physical.outcomes"),
+    ("physical.counts", [[1], [2], [3]], "physical.counts[0] = [...] is an array"),
+    ("physical.counts", [0, 0, 0], "no real rolls"),
+    ("physical.outcomes", [0.5, 1, 2], "physical.outcomes[0] = 0.5 is a float"),
+    ("physical.outcomes", [0, 0, 2], "names an outcome twice"),
+    ("fabricated_body", _DROP, "no fabricated_body.com"),
+    ("fabricated_body.volume", 0, "fabricated_body.volume = 0 is not a positive number"),
+    ("fabricated_body.volume", float("nan"), "fabricated_body.volume = nan is not a finite number"),
+    ("fabricated_body.com", [0, 0], "fabricated_body.com has 2 items, not 3"),
+    ("geometry.hull_vertices", [], "geometry.hull_vertices has 0 items"),
+    ("geometry.hull_faces.0.0", 99999, "names a vertex beyond the 6 hull_vertices"),
+    ("geometry.hull_faces.0.0", 1.5, "geometry.hull_faces[0][0] = 1.5 is a float"),
+    ("geometry.hull_faces", [], "geometry.hull_faces has 0 items"),
+    ("outcome_stable_faces", {}, "names no triangle the die rests on"),
+    ("outcome_stable_faces.0", [99999], "names triangle 99999 beyond the"),
+    ("outcome_stable_faces.x", [0], "has key 'x', which is not one of physical.outcomes"),
+    ("outcome_faces", [1, 2], "outcome_faces = [...] is an array, not a table"),
+    ("ambiguous_groups", [[7, 8]], "ambiguous_groups[0] = [7, 8] names a value"),
+    ("their_model_and_sims.ours", [0, 0, 0], "their_model_and_sims.ours is not a distribution"),
+    ("their_model_and_sims.ours", [1, 1], "their_model_and_sims.ours is not a distribution"),
+    ("shape", 5, "shape = 5 is an integer, not a string"),
+    ("", None, "holds null, not a JSON object"),
+    ("", [1, 2], "holds an array, not a JSON object"),
+]
+
+
+def _realrolls(tmp_path: Path, key: str, value) -> Path:
+    data = _set(json.loads(REALROLLS.read_text()), key, value)
+    path = tmp_path / "die.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+@pytest.mark.skipif(not REALROLLS.is_file(), reason="no real-rolls data")
+@pytest.mark.parametrize(("key", "value", "words"), BAD_REALROLLS,
+                         ids=[f"{k or 'file'}={str(v)[:20]}" for k, v, _ in BAD_REALROLLS])  # fmt: skip
+def test_bad_realrolls_files(tmp_path, bad, key, value, words):
+    line = bad("calibrate", "--realrolls", _realrolls(tmp_path, key, value), "--out", tmp_path / "out")
+    assert words in line
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize(("content", "words"), [(b"not json", "cannot read real rolls"),
+                         (b'{"shape": "\xff"}', "utf-8"), (None, "not a regular file")],
+                         ids=["not-json", "not-utf8", "device"])  # fmt: skip
+def test_realrolls_files_that_are_not_json(tmp_path, bad, content, words):
+    from diefab.calibrate import realrolls_die
+    from diefab.errors import DiefabError
+
+    path = Path("/dev/zero") if content is None else tmp_path / "die.json"
+    if content is None and not path.exists():
+        pytest.skip("no /dev/zero")
+    if content is not None:
+        path.write_bytes(content)
+    with pytest.raises(DiefabError, match="real rolls"):  # the library, as the command, refuses (never hangs)
+        realrolls_die(path)
+    if content is not None:  # click refuses a device before diefab reads it
+        assert words in bad("calibrate", "--realrolls", path, "--out", tmp_path / "out")
+
+
+# ----------------------------------------------------------------------
+# calibrate: options, bounds, resumes
+
+DIE = ["--die", "d6", "10,11,9,10,12,8"]
+BAD_CALIBRATE = [
+    (["--free", "capture", "--bound", "capture=0:200"], "bounds of capture [0, 200] reach beyond what the physics"),
+    (["--free", "capture", "--bound", "capture=-5:1"], "capture_energy=-5.0 must be in [0, 100]"),
+    (["--free", "restitution", "--bound", "restitution=0:5"], "restitution=5.0 must be in [0, 1]"),
+    (["--free", "spin", "--bound", "spin=0:5000"], "angular_velocity=[0.0, 5000.0]"),
+    (["--free", "capture", "--bound", "friction=0:1"], "bounds given for 'friction', which is not fitted"),
+    (["--free", "capture", "--bound", "capture=0:1", "--bound", "capture=0:0.5"], "capture is bounded twice"),
+    (["--free", "capture", "--bound", "capture=nan:1"], "must be finite with low < high"),
+    (["--free", "capture", "--bound", "capture=1:0"], "must be finite with low < high"),
+    (["--max-sims-per-eval", "10000000000000000"], "must be at most 100,000,000"),
+    (["--sims-per-eval", "1000000000"], "drops per evaluation 1000000000 must be at most"),
+    (["--grid-points", "5"], "--grid-points applies only to --method grid"),
+    (["--method", "grid", "--free", "capture", "--sigma", "0.1"], "--sigma applies only to --method cma or nm"),
+    (["--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], "--workers does not apply with --scheduler"),
+    (["--scheduler", "tcp://127.0.0.1:1"], "cannot reach Dask scheduler"),  # before the run folder exists
+    (["--workers", "5000", "--sims-per-eval", "20"], "workers=5000"),  # a failed start leaves no folder
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("args", "words"), BAD_CALIBRATE, ids=[" ".join(a)[:50] for a, _ in BAD_CALIBRATE])
+def test_bad_calibrate_options(tmp_path, bad, args, words):
+    assert words in bad("calibrate", *DIE, *args, "--out", tmp_path / "out")
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").rglob("*"))
+
+
+@pytest.fixture
+def calibration_run(tmp_path, run):
+    """A small finished calibration run folder (2 evaluations)."""
+    code, _, err = run("calibrate", *DIE, "--free", "restitution", "--sims-per-eval", "20", "--workers", "1",
+                       "--max-evals", "2", "--name", "c", "--out", tmp_path)  # fmt: skip
+    assert code == 0, err
+    return tmp_path / "c"
+
+
+def _edit_log(folder: Path, line: int, change) -> None:
+    records = [json.loads(t) for t in (folder / "evaluations.jsonl").read_text().splitlines()]
+    change(records[line])
+    (folder / "evaluations.jsonl").write_text("".join(json.dumps(r) + "\n" for r in records))
+
+
+def test_calibrate_resume_refuses_what_is_not_its_run(tmp_path, bad, run, calibration_run):
+    (tmp_path / "file").write_text("x")
+    assert "resume folder" in bad("calibrate", "--resume", tmp_path / "file") and "is not a folder" in bad(
+        "calibrate", "--resume", tmp_path / "file")  # fmt: skip
+    code, _, err = run("optimize", "fudge-gem", "--model", "simulation", "--start", "design", "--sims-per-eval", "16",
+                       "--max-evals", "1", "--workers", "1", "--name", "o", "--out", tmp_path)  # fmt: skip
+    assert code == 0, err
+    assert "it is an optimize run" in bad("calibrate", "--resume", tmp_path / "o")
+    assert "it is a calibration run" in bad("optimize", "fudge-gem", "--model", "simulation", "--resume",
+                                            calibration_run)  # fmt: skip
+    _edit_log(calibration_run, 0, lambda r: r["dice"][0].update(counts=[1]))  # a die's counts cut short
+    assert "line 1 is corrupt" in bad("calibrate", "--resume", calibration_run)
+
+
+def test_calibrate_refuses_a_folder_where_its_profile_goes(tmp_path, bad, calibration_run):
+    (calibration_run / "c.toml").unlink()
+    (calibration_run / "c.toml").mkdir()
+    before = (calibration_run / "evaluations.jsonl").read_text()
+    assert "is not a regular file" in bad("calibrate", "--resume", calibration_run, "--max-evals", "3")
+    assert (calibration_run / "evaluations.jsonl").read_text() == before  # refused before any drop
+    fresh = tmp_path / "fresh"
+    (fresh / "c" / "c.toml").mkdir(parents=True)
+    assert "is not a regular file" in bad("calibrate", *DIE, "--name", "c", "--out", fresh)
+    assert sorted(p.name for p in (fresh / "c").iterdir()) == ["c.toml"]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_an_interrupted_calibration_resumes_where_it_stopped(tmp_path, run, signum):
+    # 400 evaluations would take minutes: the signal comes long before the end, however loaded the machine
+    args = ["calibrate", *DIE, "--free", "restitution,friction", "--sims-per-eval", "200"]
+    log = tmp_path / "a" / "c" / "evaluations.jsonl"
+    command = [sys.executable, "-m", "diefab", *args, "--max-evals", "400", "--workers", "2", "--name", "c", "--out",
+               str(tmp_path / "a")]  # fmt: skip
+    proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    children: set[int] = set()
+    try:
+        deadline = time.monotonic() + 90
+        while proc.poll() is None and time.monotonic() < deadline and not (log.exists() and log.read_text()):
+            children |= _children(proc.pid)
+            time.sleep(0.01)
+        proc.send_signal(signum)
+        try:
+            _, err = proc.communicate(timeout=15)
+        except subprocess.TimeoutExpired:  # a signal at some moments of a 2-worker run is still lost: a second one
+            proc.send_signal(signum)
+            _, err = proc.communicate(timeout=30)
+        assert proc.returncode == 130 and err.strip().splitlines() == [
+            f"diefab: interrupted; resume with: diefab calibrate --resume {tmp_path / 'a' / 'c'}"]  # fmt: skip
+        time.sleep(0.5)
+        assert not any(map(_alive, children))
+    finally:
+        for pid in [proc.pid, *children]:
+            if _alive(pid):
+                os.kill(pid, signal.SIGKILL)
+    kept = len(log.read_text().splitlines())
+    assert kept >= 1 and not list(tmp_path.rglob("*.tmp"))
+    more = ["--max-evals", str(kept + 2), "--json"]
+    code, out, err = run("calibrate", "--resume", tmp_path / "a" / "c", "--workers", "1", *more)
+    assert code == 0, err
+    assert json.loads(out)["replayed"] == kept  # continued, not restarted
+    code, _, err = run(*args, "--workers", "1", "--name", "c", "--out", tmp_path / "b", *more)
+    assert code == 0, err
+    objectives = [[json.loads(t)["objective"] for t in (tmp_path / d / "c" / "evaluations.jsonl").read_text().split()]
+                  for d in ("a", "b")]  # fmt: skip
+    assert objectives[0] == objectives[1]  # the same trajectory as the uninterrupted run
+
+
+# ----------------------------------------------------------------------
+# physics profiles: every top-level key typed, in every command that takes one
+
+BAD_PROFILES = [
+    ("[physics]\ncapture_energy = 100.5\n", "capture_energy=100.5 must be in [0, 100]"),
+    ("[physics]\ncapture_energy = -0.1\n", "capture_energy=-0.1 must be in [0, 100]"),
+    ('[physics]\ncapture_energy = "0.8"\n', "capture_energy='0.8' must be a finite number"),
+    ("[physics]\ncapture_energy = nan\n", "capture_energy=nan must be a finite number"),
+    ("[physics]\nrestitution = true\n", "restitution=True must be a finite number"),
+    ("[physics]\nrestitution = {a = 1}\n", "restitution={'a': 1} must be a finite number"),
+    ("[physics]\nangular_velocity = [10, 0]\n", "angular_velocity=[10.0, 0.0]"),
+    ("[physics]\nsolver_iterations = 5.0\n", "solver_iterations=5.0 must be an integer"),
+    ("[physics]\ngravitas = 1\n", "unknown physics setting 'gravitas'"),
+    ("name = 5\n[physics]\n", "name = 5 is not a string"),
+    ("description = {a = 1}\n[physics]\n", "description = {'a': 1} is not a string"),
+    ('calibration = "x"\n[physics]\n', "calibration = 'x' is not a table"),
+    ('name = "x"\n', "needs a [physics] table"),
+    ("", "needs a [physics] table"),
+]
+
+
+@pytest.mark.parametrize(("text", "words"), BAD_PROFILES, ids=[t.strip()[:30] for t, _ in BAD_PROFILES])
+def test_bad_physics_profiles(tmp_path, bad, text, words):
+    path = tmp_path / "p.toml"
+    path.write_text(text)
+    assert words in bad("validate", "fudge-gem", "--sims", "10", "--workers", "1", "--physics", path)
+
+
+PROFILE_COMMANDS = [
+    ["validate", "fudge-gem", "--sims", "10"],
+    ["validate", "fudge-gem", "--sensitivity"],
+    ["optimize", "fudge-gem", "--model", "simulation"],
+    ["design", "4df"],
+    ["calibrate", *DIE],
+]
+
+
+@pytest.mark.parametrize("command", PROFILE_COMMANDS, ids=[" ".join(c[:2]) for c in PROFILE_COMMANDS])
+@pytest.mark.parametrize("profile", ["p.toml", "folder", "..", "printed-table/..", "latin1.toml"])
+def test_bad_physics_profile_in_every_command(tmp_path, bad, monkeypatch, command, profile):
+    monkeypatch.chdir(tmp_path)
+    Path("p.toml").write_text("name = 5\n[physics]\n")
+    Path("latin1.toml").write_bytes(b"[physics]\nrestitution = 0.3 # \xff\n")
+    Path("folder").mkdir()
+    line = bad(*command, "--physics", profile, *(["--out", "out"] if command[0] != "validate" else []))
+    assert "physics profile" in line and profile in line
+    assert not Path("out").exists()
+
+
+# ----------------------------------------------------------------------
+# messages that name what is wrong
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["net", "fudge-gem", "--out", "afile/sub"], "afile is a file, not a folder"),
+        (["validate", "fudge-gem", "--sims", "10", "--plot", "afile/x.png"], "afile is a file, not a folder"),
+        (["validate", "fudge-gem", "--sims", "10", "--drop-height", "0.1"], "in [0, drop_height=0.1)"),
+        (
+            ["optimize", "fudge-gem", "--model", "simulation", "--resume", "afile"],
+            "resume folder afile is not a folder",
+        ),
+        (["stl", "fudge-gem", "--font", "/dev/zero", "--out", "out"], "font file /dev/zero is not a regular file"),
+    ],
+)
+def test_messages_name_the_culprit(tmp_path, bad, monkeypatch, args, words):
+    monkeypatch.chdir(tmp_path)
+    Path("afile").write_text("x")
+    assert words in bad(*args)
+
+
+@pytest.mark.skipif(not hasattr(signal, "setitimer"), reason="needs interval timers")
+def test_an_interrupt_during_a_write_leaves_no_temporary_file(tmp_path, monkeypatch):
+    from diefab import files
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGALRM, interrupt)  # a stand-in for Ctrl-C that a timer can send at any moment
+    monkeypatch.setattr(files, "STOP_SIGNALS", (*files.STOP_SIGNALS, signal.SIGALRM))
+    rng = np.random.default_rng(0)
+    interrupted = 0
+    try:
+        for _ in range(300):
+            try:
+                signal.setitimer(signal.ITIMER_REAL, rng.uniform(0, 0.002))
+                files.write_files({tmp_path / "a.toml": "a" * 20_000, tmp_path / "b.toml": "b" * 20_000})
+                time.sleep(0.003)
+            except KeyboardInterrupt:
+                interrupted += 1
+            finally:
+                signal.setitimer(signal.ITIMER_REAL, 0)
+    finally:
+        signal.signal(signal.SIGALRM, previous)
+    assert interrupted == 300  # every interrupt arrived, none was lost
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.toml", "b.toml"]  # and none stranded a temporary file
+    assert (tmp_path / "a.toml").read_text() == "a" * 20_000
+
+
+class _FillingFile:
+    """A log file on a disk that fills: the first write takes half the line, the next one fails."""
+
+    def __init__(self, fh) -> None:
+        self.fh, self.writes = fh, 0
+
+    def write(self, data) -> int:
+        self.writes += 1
+        if self.writes > 1:
+            raise OSError(28, "No space left on device")
+        return self.fh.write(bytes(data[: len(data) // 2]))
+
+    def __getattr__(self, name):
+        return getattr(self.fh, name)
+
+
+def test_a_full_disk_mid_run_keeps_the_log_and_says_how_to_resume(tmp_path, bad, run, monkeypatch):
+    from diefab import simopt
+
+    real = simopt.RunLog.append
+
+    def filling(self, record):
+        if record["i"] == 2:  # the disk fills in the middle of the third line
+            self._fh = _FillingFile(self._fh)
+        return real(self, record)
+
+    monkeypatch.setattr(simopt.RunLog, "append", filling)
+    args = ["calibrate", *DIE, "--free", "restitution", "--sims-per-eval", "20", "--workers", "1", "--name", "c"]
+    line = bad(*args, "--max-evals", "5", "--out", tmp_path)
+    assert "No space left on device" in line and f"resume with: diefab calibrate --resume {tmp_path / 'c'}" in line
+    assert (tmp_path / "c" / "evaluations.jsonl").read_text().count("\n") == 2  # no torn third line
+    monkeypatch.setattr(simopt.RunLog, "append", real)
+    code, out, err = run("calibrate", "--resume", tmp_path / "c", "--max-evals", "5", "--workers", "1", "--json")
+    assert code == 0 and not err, err
+    assert json.loads(out)["replayed"] == 2 and json.loads(out)["evaluations"] == 5
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--sigma", "0.3"], "--sigma 0.3 differs from the run's 0.2"),
+        (["--max-sims-per-eval", "100"], "--max-sims-per-eval 100 differs from the run's 160"),
+        (["--name", "other"], "--name other differs from the folder of --resume"),
+        (["--out", "elsewhere"], "--out elsewhere differs from the folder of --resume"),
+    ],
+)
+def test_a_resumed_calibration_keeps_its_settings(calibration_run, bad, monkeypatch, args, words):
+    monkeypatch.chdir(calibration_run)
+    before = (calibration_run / "evaluations.jsonl").read_text()
+    assert words in bad("calibrate", "--resume", calibration_run, *args)
+    assert (calibration_run / "evaluations.jsonl").read_text() == before and not Path("elsewhere").exists()
+
+
+REALROLLS_FIELDS = ["shape", "description", "physical", "physical.outcomes", "physical.counts", "physical.counts.0",
+                    "their_model_and_sims.ours", "geometry.hull_vertices", "geometry.hull_vertices.0",
+                    "geometry.hull_faces", "geometry.hull_faces.0", "fabricated_body.volume", "fabricated_body.com",
+                    "fabricated_body.inertia_about_com_unit_density", "outcome_faces", "outcome_stable_faces.0",
+                    "ambiguous_groups"]  # fmt: skip
+
+
+@pytest.mark.skipif(not REALROLLS.is_file(), reason="no real-rolls data")
+@pytest.mark.parametrize("field", REALROLLS_FIELDS)
+def test_any_value_in_any_realrolls_field_is_a_die_or_a_diefab_error(field, tmp_path):
+    from hypothesis import HealthCheck, given, settings
+
+    from diefab.calibrate import realrolls_die
+    from diefab.errors import DiefabError
+
+    @settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @given(value=_toml_values())
+    def check(value):
+        path = _realrolls(tmp_path, field, value)
+        try:
+            realrolls_die(path)
+        except DiefabError:
+            pass
+
+    check()

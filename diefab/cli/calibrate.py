@@ -8,8 +8,18 @@ import click
 import numpy as np
 
 from ..calibrate import DEFAULT_FREE
-from ..files import atomic_write, output_path
-from .common import console, emit_json, get_design, json_option, out_option, physics_file_option, run_logged
+from ..files import atomic_write, check_outputs, output_path
+from .common import (
+    check_resume_folder,
+    console,
+    emit_json,
+    get_design,
+    json_option,
+    out_option,
+    physics_file_option,
+    refuse_options,
+    run_logged,
+)
 
 
 def _parse_bounds(items: tuple[str, ...]) -> dict[str, tuple[float, float]]:
@@ -21,9 +31,12 @@ def _parse_bounds(items: tuple[str, ...]) -> dict[str, tuple[float, float]]:
         try:
             if not sep or not colon:
                 raise ValueError
-            out[name.strip()] = (float(lo), float(hi))
+            bound = (float(lo), float(hi))
         except ValueError:
             raise click.BadParameter(f"{item!r} is not NAME=LOW:HIGH", param_hint="--bound") from None
+        if name.strip() in out:
+            raise click.BadParameter(f"{name.strip()} is bounded twice", param_hint="--bound")
+        out[name.strip()] = bound
     return out
 
 
@@ -105,21 +118,33 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
     for value, hint in ((sims_per_eval, "--sims-per-eval"), (max_evals, "--max-evals"), (workers, "--workers")):
         if value is not None and value <= 0:
             raise click.BadParameter(f"{value} must be > 0", param_hint=hint)
-    if max_sims_per_eval is not None and max_sims_per_eval < sims_per_eval:
+    if resume is None and max_sims_per_eval is not None and max_sims_per_eval < sims_per_eval:
         raise click.BadParameter(f"{max_sims_per_eval} must be >= --sims-per-eval", param_hint="--max-sims-per-eval")
     if not (np.isfinite(budget) and budget > 0):
         raise click.BadParameter(f"{budget} must be a positive number of minutes", param_hint="--budget")
+    if scheduler is not None:
+        refuse_options(ctx, ["workers"], "does not apply with --scheduler (the cluster's workers run the drops)")
+    if resume is None:  # a resumed run keeps its stored method
+        if method != "grid":
+            refuse_options(ctx, ["grid_points"], "applies only to --method grid")
+        else:
+            refuse_options(ctx, ["sigma"], "applies only to --method cma or nm (a grid takes no step)")
     if not name or "/" in name or "\\" in name or name in (".", ".."):
         raise click.BadParameter(f"{name!r} must be a plain name (no folders)", param_hint="--name")
     warning = None
     if resume is not None:
         log = CalibrationLog(resume)
         spec = log.spec()
-        for key, value in {"seed": seed, "sims_per_eval": sims_per_eval, "method": method,
-                           "grid_points": grid_points}.items():  # fmt: skip
-            source = ctx.get_parameter_source(key)
+        check_resume_folder(ctx, resume, out_dir)
+        if ctx.get_parameter_source("name").name == "COMMANDLINE" and name != Path(resume).resolve().name:
+            raise click.UsageError(f"--name {name} differs from the folder of --resume {resume}", ctx=ctx)
+        stored = {"seed": seed, "sims_per_eval": sims_per_eval, "method": method, "grid_points": grid_points,
+                  "sigma0": sigma, "max_sims": max_sims_per_eval}  # fmt: skip
+        for key, value in stored.items():
+            option = {"sigma0": "sigma", "max_sims": "max_sims_per_eval"}.get(key, key)
+            source = ctx.get_parameter_source(option)
             if source is not None and source.name == "COMMANDLINE" and value != getattr(spec, key):
-                raise RunError(f"--{key.replace('_', '-')} {value} differs from the run's {getattr(spec, key)} "
+                raise RunError(f"--{option.replace('_', '-')} {value} differs from the run's {getattr(spec, key)} "
                                f"(stored in {log.spec_path})")  # fmt: skip
         for key, flag in (("die_args", "--die"), ("realrolls", "--realrolls"), ("free", "--free"),
                           ("bounds", "--bound"), ("physics_profile", "--physics")):  # fmt: skip
@@ -139,15 +164,26 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
                          sigma0=sigma, grid_points=grid_points)  # fmt: skip
         run_name = name
         log = CalibrationLog(output_path(out_dir, run_name, ""))
-        log.create(spec)
         history = []
+    check_outputs([output_path(log.folder, run_name, ".toml")])  # the profile: refused now, not at the first best
+    client = None
+    if scheduler is not None:  # before the run folder exists: a wrong address leaves nothing behind
+        from ..physics import dask_client
+
+        client, _ = dask_client(scheduler)
+    if resume is None:
+        log.create(spec)
     if warning:
         click.echo(f"diefab: warning: {warning}", err=True)
-    run(spec, log, run_name, history, budget, max_evals, workers, scheduler, as_json)
+    run(spec, log, run_name, history, budget, max_evals, workers, client, as_json, fresh=resume is None)
 
 
-def run(spec, log, run_name, history, budget, max_evals, workers, scheduler, as_json) -> None:
-    """Run or continue the calibration in `log`; write the profile as it improves; print the report."""
+def run(spec, log, run_name, history, budget, max_evals, workers, client, as_json, fresh=False) -> None:
+    """Run or continue the calibration in `log`; write the profile as it improves; print the report.
+
+    `client` is a Dask client or None (local workers).  A `fresh` run that fails before its first
+    evaluation leaves no run folder behind.
+    """
     from ..calibrate import calibrate as fit
     from ..calibrate import curvature, die_report, grid_interval
     from ..profiles import profile_to_toml
@@ -184,15 +220,11 @@ def run(spec, log, run_name, history, budget, max_evals, workers, scheduler, as_
         if update:
             update(record=record)
 
-    client = None
-    if scheduler is not None:
-        from ..physics import dask_client
-
-        client, _ = dask_client(scheduler)
     result = run_logged(
         lambda: fit(spec, workers=workers, scheduler=client, history=history, on_evaluation=on_evaluation,
                     on_best=on_best, budget_seconds=budget * 60, max_evaluations=max_evals),
         log, live, client, f"diefab calibrate --resume {log.folder}",
+        on_failure=(lambda: log.discard(profile_path)) if fresh else None,
     )  # fmt: skip
     best = result.best
     if best is None:

@@ -10,6 +10,7 @@ import click
 import numpy as np
 
 from ..design import Design, load_design
+from ..errors import OutputError
 
 
 def console(stderr: bool = False):
@@ -246,6 +247,14 @@ def physics_options(func):
     return func
 
 
+def check_resume_folder(ctx: click.Context, resume: Path, out_dir: Path) -> None:
+    """Refuse an ``--out`` given with ``--resume`` that is not the run folder's own: a run stays where it is."""
+    source = ctx.get_parameter_source("out_dir")
+    if source is not None and source.name == "COMMANDLINE" and Path(out_dir).resolve() != Path(resume).resolve().parent:
+        raise click.UsageError(f"--out {out_dir} differs from the folder of --resume {resume} (a run stays where "
+                               "it is)", ctx=ctx)  # fmt: skip
+
+
 def run_logged(call, log, live, client, resume: str, on_failure=None):
     """``call()`` with the run `log` open and the `live` panel shown; Ctrl-C says how to resume.
 
@@ -265,9 +274,11 @@ def run_logged(call, log, live, client, resume: str, on_failure=None):
         log.close()
         click.echo(f"diefab: interrupted; resume with: {resume}", err=True)
         sys.exit(130)
-    except BaseException:
+    except BaseException as exc:
         if on_failure is not None:
             on_failure()
+        if isinstance(exc, OutputError) and log.holds_run():  # a full disk: what was logged is kept
+            raise OutputError(f"{exc}; the evaluations logged so far are kept, resume with: {resume}") from exc
         raise
     finally:
         if live:
@@ -312,6 +323,14 @@ def fill_options(*groups: str, kind: bool = True):
     return decorate
 
 
+def check_fill_options(kind: str, settings: dict) -> None:
+    """Refuse a material option given (not None) that a fill of `kind` does not read: it would be ignored."""
+    for option, value in settings.items():
+        group = FILL_OPTIONS[option][2][1:].split("]")[0] if option in FILL_OPTIONS else kind
+        if value is not None and group != kind:
+            raise click.UsageError(f"--{option.replace('_', '-')} applies only to --fill {group} (the fill is {kind})")
+
+
 def apply_fill(design: Design, fill_kind: str | None = None, **settings) -> Design:
     """`design` with its fill's kind and the given settings (None: keep) replaced; DesignError if out of range."""
     from dataclasses import replace
@@ -320,6 +339,7 @@ def apply_fill(design: Design, fill_kind: str | None = None, **settings) -> Desi
     changes = {FILL_OPTIONS[k][0]: v for k, v in settings.items() if k in FILL_OPTIONS and v is not None}
     if fill_kind is None and not changes:
         return design
+    check_fill_options(fill_kind or fill.kind, settings)
     return replace(design, fill=replace(fill, kind=fill_kind or fill.kind, **changes))
 
 

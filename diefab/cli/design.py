@@ -9,7 +9,17 @@ from pathlib import Path
 import click
 import numpy as np
 
-from .common import FILL_OPTIONS, console, emit_json, fill_options, json_option, out_option, physics_file_option
+from .common import (
+    FILL_OPTIONS,
+    check_fill_options,
+    console,
+    emit_json,
+    fill_options,
+    json_option,
+    out_option,
+    physics_file_option,
+    seed_option,
+)
 
 _METHOD = {
     "fair": "a fair die, its faces counted out to the target",
@@ -34,7 +44,7 @@ def _slug(text: str) -> str:
 @click.option("--budget", type=float, default=6.0, show_default=True,
               help="Wall-time budget of the search, minutes (the closing check comes on top).")  # fmt: skip
 @click.option("--name", default=None, help="Design name (default FAMILY-TARGET).")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed of starts and drops.")
+@seed_option("Seed of starts and drops.")
 @click.option("--size", "size_mm", type=float, default=30.0, show_default=True,
               help="Size in mm of the family's reference length (see the design file's description).")  # fmt: skip
 @click.option("--min-margin", type=float, default=0.05, show_default=True,
@@ -73,6 +83,7 @@ def design(target, faces, family_name, model, budget, name, seed, size_mm, min_m
 
     t0 = time.monotonic()
     goal = parse_target(target)
+    check_fill_options(fill_kind or "solid", fill_settings)
     changes = {FILL_OPTIONS[k][0]: v for k, v in fill_settings.items() if v is not None}
     made = Fill(kind=fill_kind or "solid", **changes)  # a setting out of range: DesignError, one line
     if not (np.isfinite(budget) and budget > 0):

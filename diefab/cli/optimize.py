@@ -12,6 +12,7 @@ from ..design import format_value
 from ..files import atomic_write, check_outputs, ensure_dir, output_path, safe_name
 from .common import (
     apply_fill,
+    check_resume_folder,
     console,
     design_argument,
     design_inputs,
@@ -209,7 +210,7 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         raise click.BadParameter(f"{budget} must be a positive number of minutes", param_hint="--budget")
     if sims_per_eval <= 0:
         raise click.BadParameter(f"{sims_per_eval} must be > 0", param_hint="--sims-per-eval")
-    if max_sims_per_eval is not None and max_sims_per_eval < sims_per_eval:
+    if resume is None and max_sims_per_eval is not None and max_sims_per_eval < sims_per_eval:  # else: stored
         raise click.BadParameter(f"{max_sims_per_eval} must be >= --sims-per-eval", param_hint="--max-sims-per-eval")
     if max_evals is not None and max_evals <= 0:
         raise click.BadParameter(f"{max_evals} must be > 0", param_hint="--max-evals")
@@ -233,6 +234,7 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
                        "does not apply with --resume (the run's design and start are in its run.json)")  # fmt: skip
         log = RunLog(resume)
         spec = log.spec()
+        check_resume_folder(ctx, resume, out_dir)
         stored = spec.design
         if (stored.name, stored.family, dict(stored.values), stored.target) != (d.name, d.family, dict(d.values),
                                                                                  d.target):  # fmt: skip

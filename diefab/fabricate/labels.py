@@ -161,7 +161,7 @@ def symbol_shape(path: str):
         ) from None
     file = FilePath(path)
     if not file.is_file():
-        raise FabricationError(f"svg:{path}: the file does not exist")
+        raise FabricationError(f"svg:{path}: the file {'is not a regular file' if file.exists() else 'does not exist'}")
     try:
         document = SVG.parse(str(file))
     except Exception as exc:  # svgelements reports malformed files with many exception types

@@ -91,7 +91,8 @@ def load_font(path: str | Path | None = None, *, bold: bool = True) -> Font:
     """
     font_path = default_font_path(bold) if path is None else Path(path)
     if not font_path.is_file():
-        raise FabricationError(f"font file {font_path} does not exist")
+        state = "is not a regular file" if font_path.exists() else "does not exist"
+        raise FabricationError(f"font file {font_path} {state}")
     try:
         _ft2font(str(font_path))
     except Exception as exc:  # FreeType reports unreadable files as RuntimeError/OSError/ValueError
