@@ -762,7 +762,9 @@ def test_an_interrupted_calibration_resumes_where_it_stopped(tmp_path, run, sign
         except subprocess.TimeoutExpired:  # a signal at some moments of a 2-worker run is still lost: a second one
             proc.send_signal(signum)
             _, err = proc.communicate(timeout=30)
-        assert proc.returncode == 130 and err.strip().splitlines() == [
+        # rarely, a 2-worker run that has printed its line then ends by the signal itself (status -signum, which a
+        # shell shows as 128 + signum) instead of exit 130: the log and the resume below are the same either way
+        assert proc.returncode in (130, -signum) and err.strip().splitlines() == [
             f"diefab: interrupted; resume with: diefab calibrate --resume {tmp_path / 'a' / 'c'}"]  # fmt: skip
         time.sleep(0.5)
         assert not any(map(_alive, children))
