@@ -356,7 +356,7 @@ def synthesize(
     if final_model != "solid-angle":
         polish = t0 + (rank_share + (0.1 if model == "simulation" else 0.4) * budget_seconds)
         try:
-            again = optimize_design(best.design, model=final_model, min_margin=min_margin, starts=1, seed=seed,
+            again = optimize_design(best.design, model=final_model, min_margin=min_margin, starts=0, seed=seed,
                                     name=name, deadline=polish)  # fmt: skip
             say(f"{again.design.family}: Eq. (2) {again.objective:.5f} under the {final_model} model")
             best = again
