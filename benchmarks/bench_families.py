@@ -71,7 +71,7 @@ def _key(record: dict, seed: int, physics: str) -> str:
 
 
 def _drop_range(design, seed: int, start: int, stop: int) -> tuple[np.ndarray, int]:
-    """Face counts and cocked drops of drops ``start .. stop - 1`` at `seed` (as :func:`diefab.physics.simulate.simulate`).
+    """Face counts and cocked drops of drops ``start .. stop - 1`` at `seed` (as ``diefab validate`` drops them).
 
     Drop *i* of a run depends on the seed and *i* alone, so counts of
     consecutive ranges add up to those of one longer run.
@@ -139,8 +139,8 @@ def noise_floor(p: np.ndarray, drops: int, rng: np.random.Generator, samples: in
 
 
 def models() -> dict:
+    from diefab.models.chain import landing_probabilities
     from diefab.models.correction import corrected
-    from diefab.models.fast import landing_probabilities
     from diefab.models.probabilities import MODELS
 
     return {"fast": MODELS["fast"], "general": corrected, "chain": landing_probabilities,

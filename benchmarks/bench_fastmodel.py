@@ -82,7 +82,7 @@ def iter_random_designs(seed: int, fill: str = "solid"):
 
     from diefab.core.errors import DesignError
     from diefab.dice.families import GEM
-    from diefab.made.mass import Fill
+    from diefab.made.fill import Fill
 
     base = replace(load_design("fudge-gem"), fill=Fill(kind=fill))
     bounds = GEM.bounds(["a", "b", "c", "d", "e"])
@@ -211,7 +211,7 @@ def frequencies(runs) -> np.ndarray:
 
 def chain_probabilities(designs) -> np.ndarray:
     """(n, m) the chain model (no discrepancy) at each design."""
-    from diefab.models.fast import landing_probabilities
+    from diefab.models.chain import landing_probabilities
 
     return np.array([landing_probabilities(d.polyhedron, d.mass_properties().center) for d in designs])
 
@@ -313,19 +313,19 @@ def ablation(training: TrainingSet, test, test_q) -> None:
     err = []
     for d, q in zip(test, test_q):
         c = d.mass_properties().center
-        p = fastmodel.landing_probabilities(d.polyhedron, c)
+        p = chain.landing_probabilities(d.polyhedron, c)
         err.append(tvd(shape.correct(p, d.params, d.margins()), q))
     print(f"test set with the parameters alone as coordinates: median TVD {np.median(err):.4f}, max {max(err):.4f}")
 
 
 def optima(drops: int, seeds=(1, 2), workers: int | None = None) -> None:
     """The 4dF optimum of the fast model and of its chain alone, each validated by simulation."""
+    from diefab.models import chain
     from diefab.models.probabilities import MODELS
-    from diefab.models import fast as fastmodel
     from diefab.physics.simulate import simulate
     from diefab.search.optimize import optimize_design
 
-    MODELS.setdefault("chain", fastmodel.landing_probabilities)  # for this benchmark only
+    MODELS.setdefault("chain", chain.landing_probabilities)  # for this benchmark only
     base = load_design("fudge-gem")
     goal = base.target_distribution.aligned(base.support)
     print(f"\n4dF optima (diefab optimize fudge-gem --model M, seed 0), validated with {drops} drops per seed")
@@ -380,12 +380,13 @@ def main(argv=None) -> None:
     if args.collect_only:
         return
 
-    from diefab.models.probabilities import MODELS
+    from diefab.models import chain
     from diefab.models import fast as fastmodel
+    from diefab.models.probabilities import MODELS
 
     constants = {}
     if args.calibrate:
-        fit = fastmodel.calibrate(train, [np.array(r["face_counts"]) for r in train_runs])
+        fit = chain.calibrate(train, [np.array(r["face_counts"]) for r in train_runs])
         print(f"calibrated the chain on {len(train)} training designs x {args.train_drops} drops: {fit}")
         constants = {k: v for k, v in fit.items() if k != "mean_tvd"}
     training = TrainingSet(train, train_runs) if (args.learn or args.ablation) else None
@@ -397,7 +398,7 @@ def main(argv=None) -> None:
         return
 
     def chain(poly, center, *, fill=None, inertia=None):
-        return fastmodel.landing_probabilities(poly, center, inertia=inertia, **constants)
+        return chain.landing_probabilities(poly, center, inertia=inertia, **constants)
 
     def solid_trained(poly, center, *, fill=None, inertia=None):
         return MODELS["fast"](poly, center)
@@ -428,7 +429,7 @@ def main(argv=None) -> None:
         kw = {"fill": d.fill, "inertia": inertia}
         rows.append([tvd(fn(poly, center, **kw) if name != "solid" else fn(poly, center), q)
                      for name, fn in models.items()])  # fmt: skip
-        near.append(found.distance(d.params, face_margins(poly, center), fastmodel.landing_probabilities(poly, center)))
+        near.append(found.distance(d.params, face_margins(poly, center), chain.landing_probabilities(poly, center)))
     rows = np.array(rows)
 
     info = found.info

@@ -31,9 +31,11 @@ from pathlib import Path
 import numpy as np
 
 from diefab.dice.design import load_design
-from diefab.fabricate.stl import build_solid, stl_bytes
-from diefab.made.bodies import solid_label_masses
-from diefab.made.mass import Fill, mass_properties
+from diefab.fabricate.formats import stl_bytes
+from diefab.fabricate.stl import build_solid
+from diefab.made.bodies import label_mass
+from diefab.made.fill import Fill
+from diefab.made.mass import mass_properties
 
 FILAMENT_MM = 1.75
 _WORD = re.compile(r"([GXYZEM])(-?\d*\.?\d+)")
@@ -178,7 +180,9 @@ def main() -> int:
     g_center = (g_center_print - offset + shift) @ rot
     bbox_gcode = np.ptp(np.concatenate([a, b]), axis=0)
 
-    labels = solid_label_masses(solid)
+    raised = set(solid.report.get("embossed", ()))
+    depth = solid.report["depth_mm"]
+    labels = tuple(label_mass(design.polyhedron, lb, depth, lb.face in raised) for lb in solid.labels)
     bed = design.polyhedron.face_index(solid.report["bed_face"])
     model = mass_properties(design.polyhedron, fill, mm_per_unit=scale, bed=bed, labels=labels)
     m_center, m_volume = model.center * scale, model.mass * scale**3

@@ -60,7 +60,7 @@ from diefab.core.errors import PhysicsError
 from diefab.core.files import atomic_write
 from diefab.dice.design import design_to_toml, load_design
 from diefab.dice.readings import unreadable
-from diefab.made.mass import Fill
+from diefab.made.fill import Fill
 from diefab.models.probabilities import FILL_MODELS, MODELS, face_probabilities, to_values
 from diefab.physics.profiles import load_profile, read_profile
 from diefab.physics.simulate import simulate

@@ -91,8 +91,8 @@ class TrainingSet:
 
     def __init__(self, runs: list[dict], constants: dict):
         from diefab.dice.families.sampling import record_design
+        from diefab.models.chain import landing_probabilities
         from diefab.models.correction import face_features
-        from diefab.models.fast import landing_probabilities
 
         self.runs, self.features, self.chains, self.q, self.families = runs, [], [], [], []
         self.constants = constants
@@ -141,15 +141,14 @@ def fit(path: Path = TRAINING, maxfev: int = 600, keep_chain: bool = False) -> N
     """
     from diefab.core.files import atomic_write
     from diefab.dice.families.sampling import record_design
-    from diefab.models.probabilities import correction
-    from diefab.models import fast as fastmodel
+    from diefab.models import chain, correction
 
     runs = read_runs(path)
     t = time.perf_counter()
     if keep_chain:  # the packaged table's constants, whatever features it was fitted on
         constants = dict(json.loads((DATA / correction.CORRECTION_FILE).read_text())["chain"])
     else:
-        constants = fastmodel.calibrate([record_design(r) for r in runs], [np.array(r["face_counts"]) for r in runs],
+        constants = chain.calibrate([record_design(r) for r in runs], [np.array(r["face_counts"]) for r in runs],
                                         maxfev=maxfev)  # fmt: skip
         print(f"chain constants refitted to {len(runs)} dice in {time.perf_counter() - t:.0f} s: "
               + ", ".join(f"{k} {v:.4g}" for k, v in constants.items()), flush=True)  # fmt: skip

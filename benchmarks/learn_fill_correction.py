@@ -163,7 +163,7 @@ def cached_set(name: str, kind: str, cache: dict) -> tuple[list, list[dict]]:
 
     from diefab.dice.design import load_design
     from diefab.geometry.polyhedron import face_margins
-    from diefab.made.mass import Fill
+    from diefab.made.fill import Fill
 
     fill = Fill(kind=kind)
     label = json.dumps(fill.to_mapping(), sort_keys=True) if kind in MADE else kind
@@ -238,7 +238,7 @@ def label(choice: dict) -> str:
 
 def main(argv=None) -> None:
     from diefab.core.files import atomic_write
-    from diefab.made.mass import Fill
+    from diefab.made.fill import Fill
     from diefab.models import fast as fastmodel
     from diefab.physics.simulate import PhysicsSettings
 

@@ -20,8 +20,10 @@ from diefab.dice.design import Design, design_to_toml, list_templates, load_desi
 from diefab.dice.families import GEM, Family, Parameter, families, family, gem_center_of_mass_y, gem_vertices
 from diefab.dice.readings import markings, readings
 from diefab.dice.targets import Target, parse_target
+from diefab.geometry.moments import MassProperties
 from diefab.geometry.polyhedron import Polyhedron, face_margins, solid_angles, up_faces
-from diefab.made.mass import Fill, MassProperties, mass_properties
+from diefab.made.fill import Fill
+from diefab.made.mass import mass_properties
 from diefab.models.probabilities import MODELS, face_probabilities, value_probabilities
 from diefab.physics.profiles import load_profile
 from diefab.physics.simulate import PhysicsSettings, RollResult, simulate

@@ -68,7 +68,7 @@ def test_a_non_convex_mesh_rests_on_its_hull_with_the_mass_of_its_body(tmp_path)
 
 
 def test_print_fill_of_a_non_convex_mesh_lies_between_shell_and_solid(tmp_path):
-    from diefab.made.mass import Fill
+    from diefab.made.fill import Fill
 
     d = _with_resting_values(_l_shape(tmp_path))
     solid = d.mass_properties(Fill("solid"))

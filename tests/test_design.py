@@ -65,7 +65,7 @@ def test_toml_round_trip(tmp_path):
 
 def test_shell_and_solid_fill_agree_roughly_as_the_paper_says():
     d = load_design("fudge-gem")
-    from diefab.made.mass import Fill
+    from diefab.made.fill import Fill
 
     solid = value_probabilities(d)
     shell = value_probabilities(d, fill=Fill("shell"))

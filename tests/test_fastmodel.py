@@ -11,17 +11,12 @@ from diefab.core.errors import DesignError
 from diefab.dice.design import load_design
 from diefab.dice.families import GEM, gem_parameters, gem_polyhedron
 from diefab.geometry.polyhedron import Polyhedron, face_margins
-from diefab.made.mass import Fill, mass_properties
-from diefab.models.fast import (
-    Discrepancy,
-    fast_model,
-    gem_discrepancy,
-    landing_probabilities,
-    roll_retention,
-    tipping_barriers,
-)
-from diefab.models.probabilities import MODELS, value_probabilities
+from diefab.made.fill import Fill
+from diefab.made.mass import mass_properties
 from diefab.models import fast as fastmodel
+from diefab.models.chain import landing_probabilities, roll_retention, tipping_barriers
+from diefab.models.fast import Discrepancy, fast_model, gem_discrepancy
+from diefab.models.probabilities import MODELS, value_probabilities
 
 BOUNDS = GEM.bounds(["a", "b", "c", "d", "e"])
 

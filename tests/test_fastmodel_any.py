@@ -8,8 +8,9 @@ import pytest
 from diefab.dice.design import load_design
 from diefab.dice.families.sampling import RANDOM_FAMILIES, design_record, random_design, record_design
 from diefab.geometry.polyhedron import resting_faces
+from diefab.models.chain import landing_probabilities
 from diefab.models.correction import FEATURES, Correction, corner_shares, corrected, face_features, packaged_correction
-from diefab.models.fast import fast_model, landing_probabilities
+from diefab.models.fast import fast_model
 
 
 def _dice(k: int, seed: int = 7):

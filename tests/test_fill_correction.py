@@ -11,7 +11,9 @@ from diefab.core.errors import DesignError
 from diefab.dice.design import load_design
 from diefab.dice.families import GEM
 from diefab.geometry.polyhedron import face_margins
-from diefab.made.mass import Fill, mass_properties
+from diefab.made.fill import Fill
+from diefab.made.mass import mass_properties
+from diefab.models.chain import landing_probabilities
 from diefab.models.fast import (
     FILL_COORDINATES,
     FILL_LAYERS,
@@ -20,7 +22,6 @@ from diefab.models.fast import (
     fast_model,
     fill_discrepancy,
     gem_discrepancy,
-    landing_probabilities,
 )
 
 MIRRORS = ((0, 2), (1, 3), (5, 7), (6, 8))

@@ -10,13 +10,10 @@ import pytest
 from diefab.core.errors import DesignError
 from diefab.dice.design import load_design
 from diefab.dice.readings import unreadable
-from diefab.made.mass import Fill, mass_properties
-from diefab.models.fast import (
-    Discrepancy,
-    fast_model,
-    landing_probabilities,
-    roll_retention,
-)
+from diefab.made.fill import Fill
+from diefab.made.mass import mass_properties
+from diefab.models.chain import landing_probabilities, roll_retention
+from diefab.models.fast import Discrepancy, fast_model
 from diefab.models.probabilities import FILL_MODELS, model_probabilities
 from diefab.search.optimize import Problem
 

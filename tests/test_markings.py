@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from shapely.geometry import LineString, Point, Polygon
 
-from diefab.dice.design import load_design
+from diefab.dice.design import design_axis, load_design, placed_marks
 from diefab.fabricate.net import design_net
 from diefab.fabricate.sheet import _die_texts
-from diefab.made.labels import design_axis, mark_frame, placed_marks
+from diefab.made.labels import mark_frame
 from diefab.made.text import load_font
 
 #: A gem that reads +4 and -4 from an edge and 0 from its apex; the plain gem 0 from its apex.

@@ -10,7 +10,8 @@ from hypothesis import strategies as st
 from diefab.core.errors import DesignError
 from diefab.dice.families import GEM, gem_center_of_mass_y, gem_polyhedron
 from diefab.geometry.polyhedron import Polyhedron
-from diefab.made.mass import Fill, inset, mass_properties, wall_depths
+from diefab.made.fill import Fill
+from diefab.made.mass import inset, mass_properties, wall_depths
 
 gem_params = st.fixed_dictionaries(
     {name: st.floats(p.lower, p.upper) for name, p in zip("abcd", GEM.parameters, strict=False)}
@@ -130,9 +131,8 @@ def test_card_thickness_moves_no_centre_and_tabs_add_their_own_area():
     # each face moves in along its normal; Σ area · normal = 0 for a closed surface
     np.testing.assert_allclose(bare.center, shell.center, atol=1e-12)
     assert bare.mass == pytest.approx(poly.surface_area)
-    from diefab.made.bodies import tab_shapes
     from diefab.made.mass import tab_polygons
-    from diefab.made.unfold import unfold
+    from diefab.made.unfold import tab_shapes, unfold
 
     net = unfold(poly, 15.0)
     tabs = tab_shapes(poly, 15.0, 5.0)
@@ -172,7 +172,7 @@ def test_print_walls_and_skins_of_a_cube():
 
 
 def test_an_engraved_label_takes_material_and_pulls_the_wall_in():
-    from diefab.made.mass import LabelMass
+    from diefab.made.fill import LabelMass
 
     fill = Fill("print", infill=0.2)
     bed = int(np.argmin(CUBE.normals[:, 2]))

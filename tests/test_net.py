@@ -255,10 +255,10 @@ def test_size_error_names_a_size_that_works():
 
 
 def sheets_of(design, net, **kwargs):
+    from diefab.dice.design import design_axis
     from diefab.fabricate.net import footer_texts
     from diefab.fabricate.sheet import layout_sheets, plan_footer
-    from diefab.made.labels import design_axis
-    from diefab.made.pages import pack_copies
+    from diefab.made.unfold import pack_copies
 
     plan = plan_footer(net.page.width, net.page.margin, *footer_texts(design, design.size_mm))
     values = [f for f in design.label_of if f not in design.labels]
@@ -270,7 +270,8 @@ def sheets_of(design, net, **kwargs):
 
 def _to_frame(design, net, k):
     """Affine map (page -> die frame of face k, mm), fitted from the face's corners alone."""
-    from diefab.made.labels import design_axis, face_frame
+    from diefab.dice.design import design_axis
+    from diefab.made.labels import face_frame
 
     poly = design.polyhedron
     ring = poly.vertices[poly.faces[k]] * net.mm_per_unit

@@ -7,9 +7,9 @@ import pytest
 
 from diefab import Polyhedron, load_design
 from diefab.geometry.symmetry import off_axis, symmetries
-from diefab.made.bodies import net_tab_shapes
-from diefab.made.mass import Fill, tab_polygons
-from diefab.made.unfold import unfold
+from diefab.made.fill import Fill
+from diefab.made.mass import tab_polygons
+from diefab.made.unfold import net_tab_shapes, unfold
 
 #: The tabs' centre of mass on the axis, mm (exact symmetry leaves rounding only).
 ON_AXIS_MM = 1e-9

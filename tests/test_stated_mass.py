@@ -9,8 +9,9 @@ import pytest
 
 from diefab.dice.design import load_design
 from diefab.geometry.polyhedron import face_margins
-from diefab.made.mass import Fill, mass_properties
-from diefab.models.fast import roll_retention
+from diefab.made.fill import Fill
+from diefab.made.mass import mass_properties
+from diefab.models.chain import roll_retention
 from diefab.models.probabilities import MODELS, value_probabilities
 from diefab.search.optimize import Problem, candidate_mass
 

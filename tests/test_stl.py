@@ -25,7 +25,8 @@ from diefab.fabricate.stl import (
     threemf_bytes,
 )
 from diefab.geometry.polyhedron import solid_angles
-from diefab.made.mass import Fill, inset, mass_properties
+from diefab.made.fill import Fill
+from diefab.made.mass import inset, mass_properties
 from diefab.made.text import MINUS, ambiguous, load_font, needs_underline, stroke_width, text_polygons
 
 

@@ -10,7 +10,7 @@ from diefab.dice.families import family
 from diefab.dice.readings import unreadable
 from diefab.dice.targets import parse_target
 from diefab.geometry.polyhedron import solid_angles
-from diefab.made.mass import Fill
+from diefab.made.fill import Fill
 from diefab.models.probabilities import MODELS, value_probabilities
 from diefab.search.symmetric import (
     MIN_TIPPING,

@@ -350,8 +350,8 @@ def pop_fill(options: dict) -> dict:
 
 def paper_balance(design: Design, net, spec: str, **card):
     """The balance of the paper die `net` makes (its own tabs; card settings from options or the design)."""
-    from diefab.made.bodies import net_tab_shapes
     from diefab.made.mass import mass_properties
+    from diefab.made.unfold import net_tab_shapes
     from diefab.models.balance import made_balance
 
     base = design if design.fill.kind == "paper" else apply_fill(design, "paper")

@@ -75,7 +75,7 @@ def design(target, faces, family_name, model, budget, name, seed, size_mm, min_m
     from diefab.core.files import atomic_write, ensure_dir, output_path
     from diefab.dice.design import design_to_toml
     from diefab.dice.targets import parse_target
-    from diefab.made.mass import Fill
+    from diefab.made.fill import Fill
     from diefab.physics.profiles import STANDARD, load_profile
     from diefab.physics.simulate import PhysicsSettings, simulate
     from diefab.search.synthesis import synthesize

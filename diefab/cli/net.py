@@ -47,8 +47,8 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
     closed outline per piece) for cutting machines; all text is outlines.
     """
     from diefab.core.files import check_outputs, ensure_dir, output_path, write_files
+    from diefab.dice.notes import reading_note, small_die_warning
     from diefab.fabricate.net import design_net, parse_formats, render_net
-    from diefab.made.labels import reading_note, small_die_warning
     from diefab.made.pages import parse_page
 
     kinds = parse_formats(formats)
@@ -68,7 +68,7 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
     balance = paper_balance(d, the_net, design, **card)
     if balance.warning:
         click.echo(f"diefab: warning: {balance.warning}", err=True)
-    from diefab.made.pages import pack_copies
+    from diefab.made.unfold import pack_copies
 
     n_pages = max(n.n_pages for n in pack_copies(the_net, copies))
     if as_json:

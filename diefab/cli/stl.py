@@ -77,9 +77,9 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face
     """Printable STL/3MF of DESIGN with its values engraved; report volume, mass and balance."""
     from diefab.core.errors import FabricationError
     from diefab.dice.design import format_value
+    from diefab.dice.notes import reading_note
     from diefab.fabricate.formats import inlay_stl_bytes, stl_bytes, threemf_bytes
     from diefab.fabricate.stl import build_solid
-    from diefab.made.labels import reading_note
 
     kinds = [f.strip().lower() for f in formats.split(",") if f.strip()]
     bad = [f for f in kinds if f not in ("stl", "3mf")]

@@ -32,16 +32,22 @@ from diefab.dice.families.base import default_length
 from diefab.dice.schema import check_design_data, check_mapping
 from diefab.dice.targets import Target, parse_target
 from diefab.geometry.meshes import ClosedMesh
+from diefab.geometry.moments import MassProperties, stated
 from diefab.geometry.polyhedron import Polyhedron, face_margins, resting_faces
-from diefab.made.mass import Fill, MassProperties, mesh_mass_properties, stated
+from diefab.made.bodies import body_properties
+from diefab.made.fill import Fill
+from diefab.made.mass import mesh_mass_properties
+from diefab.made.placement import LabelPlan
 
 __all__ = [
     "Design",
+    "design_axis",
     "design_to_toml",
     "format_value",
     "list_templates",
     "load_design",
     "parse_design",
+    "placed_marks",
     "template_path",
 ]
 
@@ -374,9 +380,8 @@ class Design:
         if mesh is not None and not self._mesh_is_convex:
             props = mesh_mass_properties(mesh, fill, mm_per_unit=self.mm_per_unit)
         else:
-            from diefab.made.bodies import body_properties
-
-            props = body_properties(self, fill)
+            labels = self.label_plan if fill.kind == "print" and fill.labels else None
+            props = body_properties(self.polyhedron, fill, mm_per_unit=self.mm_per_unit, labels=labels)
         if self.center_of_mass is None and self.inertia is None:
             return props
         s = self._file_scale
@@ -392,6 +397,18 @@ class Design:
                 )
         inertia = None if self.inertia is None else np.array(self.inertia) * s**2
         return stated(props, center, inertia)
+
+    @cached_property
+    def label_plan(self) -> LabelPlan:
+        """What ``diefab net`` and ``diefab stl`` print on the faces (:class:`~diefab.made.placement.LabelPlan`)."""
+        return LabelPlan(
+            self.polyhedron,
+            float(self.mm_per_unit),
+            design_axis(self),
+            dict(self.label_of),
+            tuple(placed_marks(self)),
+            frozenset(self.labels),
+        )
 
     @cached_property
     def _mesh_is_convex(self) -> bool:
@@ -572,3 +589,21 @@ def design_to_toml(design: Design, *, comment: str = "") -> str:
         data["physics"] = dict(design.physics)
     header = "".join(f"# {line}\n" for line in comment.splitlines())
     return header + tomli_w.dumps(data)
+
+
+def design_axis(design: Design) -> np.ndarray:
+    """(3,) float: the die's up axis (+y for the gem family, +z otherwise)."""
+    return np.array([0.0, 1.0, 0.0]) if design.family == "gem" else np.array([0.0, 0.0, 1.0])
+
+
+def placed_marks(design: Design) -> list:
+    """The values read at a corner or along an edge (:attr:`Design.markings` with a place), in order.
+
+    Empty for a die that no convention reads (net and stl then print the
+    face values alone, and :func:`reading_note` says what a point or an edge
+    on top means).
+    """
+    try:
+        return [m for m in design.markings if m.at]
+    except DesignError:
+        return []

@@ -23,6 +23,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from diefab.core.errors import DesignError, DiefabError
+from diefab.dice.drop import PhysicsSettings
 
 __all__ = ["FIELDS", "MAGNITUDE", "check_design_data", "check_mapping"]
 
@@ -152,8 +153,6 @@ def array(item: Check, *, length: int | None = None, least: int = 0) -> Check:
 
 
 def _physics(where: str, value: Any) -> None:
-    from diefab.physics.simulate import PhysicsSettings
-
     table()(where, value)
     try:
         PhysicsSettings.from_mapping(value)
@@ -173,7 +172,7 @@ FIELDS: dict[str, Check] = {
     "params": table(number),
     "values": table(integer),
     "labels": table(text),
-    # ranges (and unknown keys): diefab.made.mass.Fill
+    # ranges (and unknown keys): diefab.made.fill.Fill
     "fill": record(
         kind=word,
         card_g_m2=number,

@@ -15,12 +15,12 @@ import math
 from dataclasses import replace
 
 from diefab.core.errors import FabricationError
-from diefab.dice.design import Design
-from diefab.made.labels import design_axis, placed_marks, reading_note
-from diefab.made.pages import Page, pack_copies, parse_page
+from diefab.dice.design import Design, design_axis, placed_marks
+from diefab.dice.notes import reading_note
+from diefab.made.pages import Page, parse_page
 from diefab.made.tabs import TAB_WIDTH
 from diefab.made.text import MARKS
-from diefab.made.unfold import Net, unfold
+from diefab.made.unfold import Net, pack_copies, unfold
 
 __all__ = ["FORMATS", "design_net", "footer_texts", "parse_formats", "render_net"]
 

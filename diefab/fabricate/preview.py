@@ -13,8 +13,9 @@ import io
 
 import numpy as np
 
+from diefab.dice.design import design_axis
+from diefab.dice.notes import reading_note
 from diefab.fabricate.stl import Solid
-from diefab.made.labels import design_axis, reading_note
 
 __all__ = ["render_preview"]
 

@@ -408,12 +408,12 @@ def layout_sheets(
     Parameters
     ----------
     labels : face name -> text printed on it (``Design.label_of``).
-    axis : (3,) float, the die's up axis (:func:`~.labels.design_axis`).
+    axis : (3,) float, the die's up axis (:func:`~diefab.dice.design.design_axis`).
     plan : the footer (:func:`plan_footer`; the page's ``footer`` is its height).
     values : faces whose labels are values, given one common height.
     face_names : print the small face names (f1, f2, ...) too.
     mark, pips : see :func:`~.labels.label_shape`.
-    marks : values read at a corner or along an edge (:func:`~.labels.placed_marks`).
+    marks : values read at a corner or along an edge (:func:`~diefab.dice.design.placed_marks`).
     """
     from shapely import affinity
 

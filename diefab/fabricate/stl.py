@@ -57,11 +57,13 @@ import numpy as np
 from diefab.core import tolerances as tol
 from diefab.core.errors import FabricationError
 from diefab.dice.design import Design
-from diefab.fabricate.engrave import Label, Labelling, checked, cut_labels, cutter, label_faces, stroke_warnings
-from diefab.fabricate.formats import inlay_stl_bytes, stl_bytes, threemf_bytes
+from diefab.dice.notes import small_die_warning
+from diefab.fabricate.engrave import checked, cut_labels, cutter
 from diefab.geometry.polyhedron import Polyhedron
-from diefab.made.labels import small_die_warning
-from diefab.made.mass import Fill, bed_face, inset
+from diefab.made.bodies import MAX_DEPTH_FRACTION, label_mass, thinnest_width
+from diefab.made.fill import Fill
+from diefab.made.mass import bed_face, inset, mass_properties
+from diefab.made.placement import Label, Labelling, label_faces, stroke_warnings
 from diefab.made.text import Font, load_font
 
 __all__ = [
@@ -71,14 +73,9 @@ __all__ = [
     "build_solid",
     "cut_labels",
     "flat_face_probabilities",
-    "inlay_stl_bytes",
     "mesh_moments",
-    "stl_bytes",
-    "threemf_bytes",
 ]
 
-#: Largest depth as a fraction of the die's thinnest width.
-MAX_DEPTH_FRACTION = 0.1
 #: Segments of the spheres that round edges and corners.
 ROUND_SEGMENTS = 32
 
@@ -207,12 +204,6 @@ def _rotation_to_down(normal: np.ndarray) -> np.ndarray:
     return np.eye(3) + s * kx + (1 - c) * kx @ kx
 
 
-def _min_width(poly: Polyhedron) -> float:
-    """Thinnest width of the solid between a face and the opposite support plane."""
-    heights = poly.offsets[:, None] - poly.normals @ poly.vertices.T
-    return float(heights.max(axis=1).min())
-
-
 # ----------------------------------------------------------------------
 # building
 
@@ -331,8 +322,8 @@ def build_solid(
         Show value labels 1 to 9 as pips.
     with_marks : bool
         Also engrave the values read at a corner or along an edge
-        (:func:`~.labels.placed_marks`, e.g. the gem's apex), in that corner
-        or along that edge of every face that holds it (:func:`~.engrave.label_faces`).
+        (:func:`~diefab.dice.design.placed_marks`, e.g. the gem's apex), in that corner
+        or along that edge of every face that holds it (:func:`~diefab.made.placement.label_faces`).
 
     Returns
     -------
@@ -367,7 +358,7 @@ def build_solid(
         design = replace(design, size_mm=float(size_mm))
     font = font if isinstance(font, Font) else load_font(font)
     poly, scale = design.polyhedron, design.mm_per_unit
-    width = _min_width(poly) * scale
+    width = thinnest_width(poly) * scale
     if depth_mm >= MAX_DEPTH_FRACTION * width:
         raise FabricationError(
             f"depth={depth_mm:g} mm is too deep for a die {width:.2f} mm thick at its thinnest "
@@ -393,7 +384,7 @@ def build_solid(
     ]
 
     # --- labels
-    labelling = label_faces(design, flat, font, depth_mm=depth_mm, margin_mm=margin_mm,
+    labelling = label_faces(design.label_plan, flat, font, depth_mm=depth_mm, margin_mm=margin_mm,
                             min_text_height_mm=min_text_height_mm, min_stroke_mm=min_stroke_mm, mark=mark, pips=pips,
                             uniform_height=uniform_height, with_marks=with_marks)  # fmt: skip
     warnings.extend(labelling.warnings)
@@ -584,24 +575,8 @@ def _printed(design, print_fill, labels, raised, depth_mm, bed_index, round_mm, 
     """
     poly, scale = design.polyhedron, design.mm_per_unit
     if round_mm == 0:
-        from diefab.made.mass import LabelMass, mass_properties
-
-        label_mass = tuple(
-            LabelMass(
-                poly.face_index(lb.face),
-                lb.area_mm2,
-                lb.centroid_mm,
-                lb.normal,
-                depth_mm,
-                up,
-                lb.outline,
-                lb.origin_mm,
-                lb.baseline,
-                lb.up,
-            )  # fmt: skip
-            for lb, up in zip(labels, raised)
-        )
-        printed = mass_properties(poly, print_fill, mm_per_unit=scale, bed=bed_index, labels=label_mass)
+        weighed = tuple(label_mass(poly, lb, depth_mm, up) for lb, up in zip(labels, raised))
+        printed = mass_properties(poly, print_fill, mm_per_unit=scale, bed=bed_index, labels=weighed)
         return printed.mass * scale**3, printed.center * scale, True
     core_inset = max(round_mm, print_fill.wall_thickness_mm)
     core_radius = max(0.0, round_mm - print_fill.wall_thickness_mm)

@@ -2,117 +2,117 @@
 
 :func:`tab_shapes` reads the glue tabs off the net ``diefab net`` lays out
 (their real trapezoids, moved from the page onto the faces they are glued
-to); :func:`label_masses` reads the labels off the solid ``diefab stl``
-builds.  :func:`body_properties` gives a design's mass properties with both,
-which is what :meth:`diefab.dice.design.Design.mass_properties` returns.
+to); :func:`label_masses` weighs the labels ``diefab stl`` engraves, from
+where they are placed (:func:`~diefab.made.placement.label_faces`: the same
+regions the printed die's cutters are extruded from).  :func:`body_properties`
+gives the mass properties with both, which is what
+:meth:`diefab.dice.design.Design.mass_properties` returns.
 
 Examples
 --------
 >>> from diefab.dice.design import load_design
+>>> from diefab.made.fill import Fill
+>>> from diefab.made.unfold import tab_shapes
 >>> d6 = load_design("d6")
->>> tabs = tab_shapes(d6.polyhedron, d6.mm_per_unit, 5.0)
->>> len(tabs)  # a cube's net has 7 cut edges, one tab each
+>>> len(tab_shapes(d6.polyhedron, d6.mm_per_unit, 5.0))  # a cube's net has 7 cut edges, one tab each
 7
+>>> body_properties(d6.polyhedron, Fill("solid"), mm_per_unit=d6.mm_per_unit).center.round(12).tolist()
+[0.0, 0.0, 0.0]
 """
 
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from diefab.made.mass import Fill, LabelMass, MassProperties, TabShape, mass_properties
+from diefab.core.errors import FabricationError
+from diefab.geometry.moments import MassProperties
+from diefab.geometry.polyhedron import Polyhedron
+from diefab.made.fill import Fill, LabelMass
+from diefab.made.mass import mass_properties
+from diefab.made.placement import Label, LabelPlan, label_faces
+from diefab.made.text import load_font
 
-if TYPE_CHECKING:
-    from diefab.dice.design import Design
-    from diefab.fabricate.stl import Solid
-    from diefab.geometry.polyhedron import Polyhedron
-    from diefab.made.unfold import Net
+__all__ = [
+    "ENGRAVE_DEPTH_MM",
+    "MAX_DEPTH_FRACTION",
+    "body_properties",
+    "label_mass",
+    "label_masses",
+    "thinnest_width",
+]
 
-__all__ = ["body_properties", "label_masses", "net_tab_shapes", "solid_label_masses", "tab_shapes"]
-
-
-def net_tab_shapes(net: Net) -> tuple[TabShape, ...]:
-    """The tabs of a laid-out net, as :class:`~diefab.made.mass.TabShape` on the die's edges."""
-    poly = net.poly
-    out = []
-    for tab in net.tabs:
-        ring = net.faces[tab.face]
-        p, q, far_q, far_p = tab.polygon
-        i = int(np.argmin(np.linalg.norm(ring - p, axis=1)))
-        n = len(ring)
-        a, b = int(poly.faces[tab.face][i]), int(poly.faces[tab.face][(i + 1) % n])
-        u = (q - p) / np.linalg.norm(q - p)
-        normal = np.array([-u[1], u[0]])
-        width = abs(float((far_p - p) @ normal))
-        lean_a = float((far_p - p) @ u) / width
-        lean_b = float((q - far_q) @ u) / width
-        faces = poly.edge_faces[tab.edge]
-        glued = int(faces[0] if faces[1] == tab.face else faces[1])
-        out.append(TabShape(a, b, glued, width, lean_a, lean_b))
-    return tuple(out)
+#: How ``diefab stl`` engraves by default: depth, margin, smallest text and stroke, mm.
+ENGRAVE_DEPTH_MM = 0.6
+ENGRAVE_MARGIN_MM = 1.0
+ENGRAVE_MIN_TEXT_MM = 2.0
+ENGRAVE_MIN_STROKE_MM = 0.6
+#: Deepest engraving (or highest embossing) as a share of the die's thinnest width.
+MAX_DEPTH_FRACTION = 0.1
 
 
-@lru_cache(maxsize=64)
-def _tabs_cached(key: bytes, faces: tuple, poly: Polyhedron, mm_per_unit: float, tab_mm: float):
-    from diefab.made.unfold import unfold
-
-    return net_tab_shapes(unfold(poly, mm_per_unit, tab_width=tab_mm))
-
-
-def tab_shapes(poly: Polyhedron, mm_per_unit: float, tab_mm: float) -> tuple[TabShape, ...]:
-    """The glue tabs of the net of `poly` that ``diefab net`` lays out on A4 (none when `tab_mm` is 0)."""
-    if tab_mm == 0:
-        return ()
-    faces = tuple(tuple(int(v) for v in f) for f in poly.faces)
-    return _tabs_cached(poly.vertices.tobytes(), faces, poly, float(mm_per_unit), float(tab_mm))
-
-
-def solid_label_masses(solid: Solid) -> tuple[LabelMass, ...]:
-    """The labels of a built solid, as :class:`~diefab.made.mass.LabelMass` (mm, the die's coordinates)."""
-    poly = solid.design.polyhedron
-    depth, raised = solid.report["depth_mm"], set(solid.report.get("embossed", ()))
-    return tuple(
-        LabelMass(
-            poly.face_index(lb.face),
-            lb.area_mm2,
-            np.asarray(lb.centroid_mm),
-            np.asarray(lb.normal),
-            depth,
-            lb.face in raised,
-            lb.outline,
-            np.asarray(lb.origin_mm),
-            np.asarray(lb.baseline),
-            np.asarray(lb.up),
-        )  # fmt: skip
-        for lb in solid.labels
+def label_mass(poly: Polyhedron, label: Label, depth_mm: float, raised: bool) -> LabelMass:
+    """One placed label as a prism of its outline, `depth_mm` into (or, `raised`, out of) its face."""
+    return LabelMass(
+        poly.face_index(label.face),
+        label.area_mm2,
+        np.asarray(label.centroid_mm),
+        np.asarray(label.normal),
+        depth_mm,
+        raised,
+        label.outline,
+        np.asarray(label.origin_mm),
+        np.asarray(label.baseline),
+        np.asarray(label.up),
     )
 
 
-@lru_cache(maxsize=64)
-def _labels_cached(key, design: Design) -> tuple[LabelMass, ...]:
-    from diefab.core.errors import FabricationError
-    from diefab.fabricate.stl import build_solid
+def thinnest_width(poly: Polyhedron) -> float:
+    """Thinnest width of the solid between a face and the opposite support plane, model units."""
+    heights = poly.offsets[:, None] - poly.normals @ poly.vertices.T
+    return float(heights.max(axis=1).min())
 
+
+@lru_cache(maxsize=64)
+def _labels_cached(key, plan: LabelPlan) -> tuple[LabelMass, ...]:
+    poly, scale = plan.poly, plan.mm_per_unit
+    if ENGRAVE_DEPTH_MM >= MAX_DEPTH_FRACTION * thinnest_width(poly) * scale:
+        return ()  # too thin a die to engrave (diefab stl refuses it)
+    flat = [poly.vertices[f] * scale for f in poly.faces]
     try:
-        return solid_label_masses(build_solid(design, print_fill=Fill("print")))
+        placed = label_faces(plan, flat, load_font(None), depth_mm=ENGRAVE_DEPTH_MM, margin_mm=ENGRAVE_MARGIN_MM,
+                             min_text_height_mm=ENGRAVE_MIN_TEXT_MM, min_stroke_mm=ENGRAVE_MIN_STROKE_MM)  # fmt: skip
     except FabricationError:  # labels that do not fit are not engraved (diefab stl refuses such a die)
         return ()
+    return tuple(label_mass(poly, label, ENGRAVE_DEPTH_MM, False) for label in placed.labels)
 
 
-def label_masses(design: Design) -> tuple[LabelMass, ...]:
-    """The labels ``diefab stl`` engraves on `design` by default (0.6 mm deep); none if they do not fit."""
-    if not design.label_of:
+def label_masses(plan: LabelPlan | None) -> tuple[LabelMass, ...]:
+    """The labels ``diefab stl`` engraves by default (0.6 mm deep, sharp edges); none if they do not fit."""
+    if plan is None or not plan.texts:
         return ()
-    key = (design.polyhedron.vertices.tobytes(), design.size_mm, design.family, tuple(design.label_of.items()))
-    return _labels_cached(key, design)
+    key = (plan.poly.vertices.tobytes(), plan.mm_per_unit, plan.axis.tobytes(), tuple(plan.texts.items()),
+           tuple((m.face, m.text, m.at) for m in plan.marks), plan.logos)  # fmt: skip
+    return _labels_cached(key, plan)
 
 
-def body_properties(design: Design, fill: Fill | None = None) -> MassProperties:
-    """Mass properties of `design` made with `fill` (default its own): the net's tabs, the print's labels."""
-    fill = fill or design.fill
+def body_properties(
+    poly: Polyhedron, fill: Fill, *, mm_per_unit: float, labels: LabelPlan | None = None
+) -> MassProperties:
+    """Mass properties of `poly` made with `fill`: a paper die's net tabs, a print's engraved `labels`.
+
+    Parameters
+    ----------
+    poly : Polyhedron
+        Model units.
+    fill : Fill
+    mm_per_unit : float
+        Millimetres per model unit.
+    labels : LabelPlan, optional
+        What is printed on the faces; a print with ``fill.labels`` weighs them.
+    """
     kwargs = {}
     if fill.kind == "print" and fill.labels:
-        kwargs["labels"] = label_masses(design)
-    return mass_properties(design.polyhedron, fill, mm_per_unit=design.mm_per_unit, **kwargs)
+        kwargs["labels"] = label_masses(labels)
+    return mass_properties(poly, fill, mm_per_unit=mm_per_unit, **kwargs)

@@ -19,11 +19,6 @@
 
 Examples
 --------
->>> from diefab.dice.design import load_design
->>> reading_note(load_design("fudge-gem"))
-'read the face on top; a point up means 0'
->>> reading_note(load_design("d6"))
-'read the face on top'
 >>> round(pip_shape(5).area / pip_shape(1).area, 6)
 5.0
 """
@@ -35,29 +30,22 @@ import math
 import numpy as np
 
 from diefab.core.errors import FabricationError
-from diefab.dice.design import Design, format_value
 from diefab.made.text import CURVE_STEPS, Font, ambiguous, nest_rings, text_polygons
 
 __all__ = [
     "AXIS_PROJECTION",
-    "design_axis",
     "face_frame",
     "fit_label",
     "label_shape",
     "mark_frame",
     "pip_shape",
-    "placed_marks",
     "symbol_shape",
-    "reading_note",
-    "small_die_warning",
 ]
 
 #: A face whose plane holds less than this much of the die's axis uses the longest-edge rule.
 AXIS_PROJECTION = 0.3
 #: Pip diameter as a fraction of the pip square's side.
 PIP_DIAMETER = 0.24
-#: Dice smaller than this (in their size convention) are hard to handle and to read, mm.
-SMALL_DIE_MM = 8.0
 #: A value read at a corner or along an edge goes in the face shrunk toward that corner (the edge's middle)
 #: by this factor.
 MARK_REACH = 0.4
@@ -76,11 +64,6 @@ _PIP_SPOTS = {
     8: [(-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1)],
     9: [(x, y) for x in (-1, 0, 1) for y in (-1, 0, 1)],
 }
-
-
-def design_axis(design: Design) -> np.ndarray:
-    """(3,) float: the die's up axis (+y for the gem family, +z otherwise)."""
-    return np.array([0.0, 1.0, 0.0]) if design.family == "gem" else np.array([0.0, 0.0, 1.0])
 
 
 def face_frame(ring: np.ndarray, normal: np.ndarray, axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -233,21 +216,6 @@ def fit_label(region, shape, max_height: float = math.inf) -> tuple[float, float
     return min(lo, max_height), float(center.x), float(center.y)
 
 
-def placed_marks(design: Design) -> list:
-    """The values read at a corner or along an edge (:attr:`Design.markings` with a place), in order.
-
-    Empty for a die that no convention reads (net and stl then print the
-    face values alone, and :func:`reading_note` says what a point or an edge
-    on top means).
-    """
-    from diefab.core.errors import DesignError
-
-    try:
-        return [m for m in design.markings if m.at]
-    except DesignError:
-        return []
-
-
 def mark_frame(ring: np.ndarray, at: tuple[int, ...], *, y_down: bool = False):
     """Where on a face a value read at a corner or along an edge goes, and which way up.
 
@@ -292,30 +260,3 @@ def mark_frame(ring: np.ndarray, at: tuple[int, ...], *, y_down: bool = False):
         x = -x
     zone = affinity.scale(face, MARK_REACH, MARK_REACH, origin=(float(origin[0]), float(origin[1])))
     return zone, origin, x, up
-
-
-def reading_note(design: Design) -> str:
-    """How to read the die: the face on top, and what a point or an edge on top means."""
-    poly = design.polyhedron
-    extra = []
-    for rest, up in design.label_face.items():
-        if up is not None or rest not in design.value_of:  # a transitional face: the die never rests on it
-            continue
-        k = poly.face_index(rest)
-        heights = poly.vertices @ -poly.normals[k]
-        top = int(np.sum(heights > heights.max() - 1e-6 * max(1.0, float(np.ptp(heights)))))
-        what = "a point" if top == 1 else "an edge" if top == 2 else "a small face"
-        value = design.value_of[rest]
-        extra.append(f"{what} up means {format_value(value, min(design.support) < 0)}")
-    return "; ".join(["read the face on top", *dict.fromkeys(extra)])
-
-
-def small_die_warning(design: Design, size_mm: float | None = None) -> str | None:
-    """A warning for a die under about ``SMALL_DIE_MM``, else None."""
-    size = design.size_mm if size_mm is None else size_mm
-    if size >= SMALL_DIE_MM:
-        return None
-    return (
-        f"a {size:g} mm die ({design.size_note}) is under about {SMALL_DIE_MM:g} mm: "
-        "hard to handle, fold or read; consider a larger --size"
-    )

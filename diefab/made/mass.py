@@ -41,311 +41,37 @@ symmetry holds here:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
-from typing import Literal
+from dataclasses import dataclass
 
 import numpy as np
 
 from diefab.core import tolerances as tol
-from diefab.core.errors import DesignError, GeometryError
+from diefab.core.errors import GeometryError
 from diefab.geometry.meshes import ClosedMesh
+from diefab.geometry.moments import (
+    MassProperties,
+    Moments,
+    combine,
+    point_moments,
+    properties,
+    sheet_moments,
+    shell_moments,
+    shell_moments_of,
+    solid_moments,
+    solid_moments_of,
+)
 from diefab.geometry.polyhedron import Polyhedron, _cross
+from diefab.made.fill import TAB_MAX_FRACTION, TAB_TOP_FRACTION, Fill, LabelMass, TabShape
+from diefab.made.unfold import tab_shapes
 
 __all__ = [
-    "Fill",
-    "LabelMass",
-    "MassProperties",
-    "TabShape",
     "bed_face",
     "inset",
     "mass_properties",
     "mesh_mass_properties",
-    "stated",
+    "tab_polygons",
+    "wall_depths",
 ]
-
-_CANONICAL = np.array([[2.0, 1.0, 1.0], [1.0, 2.0, 1.0], [1.0, 1.0, 2.0]]) / 120
-
-#: Density of card, g/cm³: the thickness of a card is its grammage over this (160 g/m² -> 0.2 mm).
-CARD_DENSITY = 0.8
-#: Extrusion width of a line as a multiple of the nozzle diameter (PrusaSlicer's automatic width).
-LINE_WIDTH_FACTOR = 1.125
-#: Engraving depth of the labels in the print model of a design, mm (``diefab stl``'s default).
-LABEL_DEPTH_MM = 0.6
-#: A tab is never wider than this fraction of its edge ("about half the edge").
-TAB_MAX_FRACTION = 0.45
-#: The tab's outer side keeps at least this fraction of the edge length.
-TAB_TOP_FRACTION = 0.1
-
-KINDS = ("solid", "shell", "paper", "print")
-
-
-def _number(name: str, value, lo: float, hi: float, unit: str, *, lo_open: bool = True, integer: bool = False):
-    """Check one Fill field: a real number (not a bool or a string) in its range."""
-    kind = "an integer" if integer else "a number"
-    unit = f" {unit}" if unit else ""
-    ok_type = isinstance(value, (int, np.integer)) if integer else isinstance(value, (int, float, np.number))
-    if isinstance(value, (bool, np.bool_)) or not ok_type:
-        raise DesignError(f"fill {name}={value!r} must be {kind} in {'(' if lo_open else '['}{lo:g}, {hi:g}]{unit}")
-    if not (math.isfinite(value) and (value > lo if lo_open else value >= lo) and value <= hi):
-        raise DesignError(f"fill {name}={value!r} is outside {'(' if lo_open else '['}{lo:g}, {hi:g}]{unit}")
-
-
-@dataclass(frozen=True)
-class Fill:
-    """How the die is made.
-
-    Parameters
-    ----------
-    kind : {"solid", "shell", "paper", "print"}
-    card_g_m2 : float
-        Paper: grammage of the card, g/m² (0, 1000].
-    card_mm : float, optional
-        Paper: card thickness, mm (0, 2]; default ``card_g_m2 / 800``
-        (card of density 0.8 g/cm³).
-    tabs : bool
-        Paper: include the glue tabs of the die's net.
-    tab_mm : float
-        Paper: glue-tab width before narrowing, mm (the net's ``--tab-width``).
-    glue_g_m2 : float
-        Paper: dry glue on every tab, g/m² [0, 500].
-    nozzle_mm : float
-        Print: nozzle diameter, mm (0, 2]; lines are 1.125 of it wide.
-    perimeters : int
-        Print: perimeters (wall lines) along the sides, [1, 20].
-    layer_mm : float
-        Print: layer height, mm, (0, nozzle_mm].
-    top_layers, bottom_layers : int
-        Print: solid layers under every upward face and above every downward
-        one (the bed face included), [0, 50].
-    infill : float
-        Print: fraction of the inside that is material, [0, 1].
-    wall_mm : float, optional
-        Print: side-wall thickness, mm, overriding ``perimeters`` lines
-        (default: perimeters x line spacing).
-    solid_below_mm2 : float
-        Print: a layer whose infill region is smaller than this (mm²) is
-        filled solid, [0, 10000] (PrusaSlicer's ``solid_infill_below_area``).
-    skin_margin_mm : float
-        Print: how far the solid layers next to an engraving reach into the
-        infill beyond the text, mm, [0, 50] (PrusaSlicer widens top and
-        bottom surfaces by 3 mm).
-    labels : bool
-        Print: include the engraved labels in a design's body.
-    """
-
-    kind: Literal["solid", "shell", "paper", "print"] = "solid"
-    card_g_m2: float = 160.0
-    card_mm: float | None = None
-    tabs: bool = True
-    tab_mm: float = 5.0
-    glue_g_m2: float = 0.0
-    nozzle_mm: float = 0.4
-    perimeters: int = 2
-    layer_mm: float = 0.2
-    top_layers: int = 4
-    bottom_layers: int = 4
-    infill: float = 0.15
-    wall_mm: float | None = None
-    solid_below_mm2: float = 70.0
-    skin_margin_mm: float = 3.0
-    labels: bool = True
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.kind, str) or self.kind not in KINDS:
-            raise DesignError(f"fill kind={self.kind!r} is not one of {', '.join(KINDS)}")
-        _number("card_g_m2", self.card_g_m2, 0, 1000, "g/m²")
-        if self.card_mm is not None:
-            _number("card_mm", self.card_mm, 0, 2, "mm")
-        for name in ("tabs", "labels"):
-            if not isinstance(getattr(self, name), (bool, np.bool_)):
-                raise DesignError(f"fill {name}={getattr(self, name)!r} must be true or false")
-        _number("tab_mm", self.tab_mm, 0, 50, "mm", lo_open=False)
-        _number("glue_g_m2", self.glue_g_m2, 0, 500, "g/m²", lo_open=False)
-        _number("nozzle_mm", self.nozzle_mm, 0, 2, "mm")
-        _number("perimeters", self.perimeters, 1, 20, "", lo_open=False, integer=True)
-        _number("layer_mm", self.layer_mm, 0, self.nozzle_mm, "mm (at most the nozzle)")
-        _number("top_layers", self.top_layers, 0, 50, "", lo_open=False, integer=True)
-        _number("bottom_layers", self.bottom_layers, 0, 50, "", lo_open=False, integer=True)
-        _number("infill", self.infill, 0, 1, "", lo_open=False)
-        if self.wall_mm is not None:
-            _number("wall_mm", self.wall_mm, 0, 50, "mm")
-        _number("solid_below_mm2", self.solid_below_mm2, 0, 10000, "mm²", lo_open=False)
-        _number("skin_margin_mm", self.skin_margin_mm, 0, 50, "mm", lo_open=False)
-
-    @classmethod
-    def from_mapping(cls, data, source: str = "[fill]") -> Fill:
-        """A fill from a design's ``[fill]`` table; unknown keys are errors."""
-        if not isinstance(data, dict):
-            raise DesignError(f"{source} must be a table, got {data!r}")
-        known = [f.name for f in fields(cls)]
-        unknown = sorted(set(data) - set(known))
-        if unknown:
-            raise DesignError(f"{source}: unknown key {unknown[0]!r} (keys: {', '.join(known)})")
-        return cls(**data)
-
-    def to_mapping(self) -> dict:
-        """The fields that matter for this kind, TOML-ready (unset optional fields left out)."""
-        keys = {
-            "solid": (),
-            "shell": (),
-            "paper": ("card_g_m2", "card_mm", "tabs", "tab_mm", "glue_g_m2"),
-            "print": ("nozzle_mm", "perimeters", "layer_mm", "top_layers", "bottom_layers", "infill", "wall_mm",
-                      "solid_below_mm2", "skin_margin_mm", "labels"),
-        }[self.kind]  # fmt: skip
-        return {"kind": self.kind, **{k: getattr(self, k) for k in keys if getattr(self, k) is not None}}
-
-    @property
-    def card_thickness_mm(self) -> float:
-        """Thickness of the card, mm."""
-        return self.card_mm if self.card_mm is not None else self.card_g_m2 / (1000 * CARD_DENSITY)
-
-    @property
-    def line_spacing_mm(self) -> float:
-        """Distance between neighbouring perimeter lines, mm: width - layer x (1 - pi/4) (rounded-edge lines)."""
-        return LINE_WIDTH_FACTOR * self.nozzle_mm - self.layer_mm * (1 - math.pi / 4)
-
-    @property
-    def wall_thickness_mm(self) -> float:
-        """Side-wall thickness of a print, mm (the material of `perimeters` lines)."""
-        return self.wall_mm if self.wall_mm is not None else self.perimeters * self.line_spacing_mm
-
-    def describe(self) -> str:
-        """One line: the settings of this kind."""
-        if self.kind == "paper":
-            tabs = f"glue tabs {self.tab_mm:g} mm" if self.tabs else "no tabs"
-            glue = f", glue {self.glue_g_m2:g} g/m²" if self.glue_g_m2 else ""
-            return f"paper {self.card_g_m2:g} g/m² card {self.card_thickness_mm:.2f} mm, {tabs}{glue}"
-        if self.kind == "print":
-            walls = f"{self.wall_mm:g} mm walls" if self.wall_mm is not None else f"{self.perimeters} perimeters"
-            return (
-                f"print {self.nozzle_mm:g} mm nozzle, {walls}, {self.layer_mm:g} mm layers, "
-                f"{self.top_layers}/{self.bottom_layers} top/bottom layers, {self.infill:.0%} infill"
-            )
-        return self.kind
-
-
-@dataclass(frozen=True)
-class TabShape:
-    """One glue tab of a paper net, in terms of the die's edge it glues.
-
-    The tab hangs off the edge from vertex `a` to vertex `b` (in that order
-    around the face it is printed on) and, folded in, lies flat on the inside
-    of face `glued`: a trapezoid `width_mm` deep whose far side starts
-    ``lean_a * width_mm`` from `a` and ends ``lean_b * width_mm`` before `b`.
-    Taken from a laid-out net (:func:`diefab.made.bodies.net_tab_shapes`), it can
-    be put on any die of the same combinatorics; a shorter edge narrows it by
-    the net's own rule.
-    """
-
-    a: int
-    b: int
-    glued: int
-    width_mm: float
-    lean_a: float
-    lean_b: float
-
-
-@dataclass(frozen=True)
-class LabelMass:
-    """The material a label takes away (engraved) or adds (embossed), as a thin prism.
-
-    area_mm2 : text area; centroid_mm : (3,) its centroid on the face;
-    normal : (3,) the face's outward normal; face : index of the face;
-    depth_mm : engraving depth or embossing height.  Optionally the text's
-    outline (shapely, face coordinates x along `baseline`, y along `up`,
-    from `origin_mm`), which gives the footprint of the walls that follow
-    the engraving; without it they follow the text's own area.
-    """
-
-    face: int
-    area_mm2: float
-    centroid_mm: np.ndarray
-    normal: np.ndarray
-    depth_mm: float
-    emboss: bool = False
-    outline: object = None
-    origin_mm: np.ndarray | None = None
-    baseline: np.ndarray | None = None
-    up: np.ndarray | None = None
-
-    def footprint(self, grow_mm: float) -> tuple[float, np.ndarray]:
-        """Area (mm²) and centroid (mm, on the face) of the text grown by `grow_mm`."""
-        if self.outline is None or grow_mm <= 0:
-            return self.area_mm2, np.asarray(self.centroid_mm, dtype=float)
-        grown = self.outline.buffer(grow_mm)
-        c = grown.centroid
-        return float(grown.area), self.origin_mm + c.x * self.baseline + c.y * self.up
-
-
-@dataclass(frozen=True, eq=False)
-class MassProperties:
-    """Mass, centre of mass and inertia tensor (about the centre of mass), unit density."""
-
-    mass: float
-    center: np.ndarray
-    inertia: np.ndarray
-
-    @property
-    def principal_moments(self) -> np.ndarray:
-        """(3,) float: eigenvalues of :attr:`inertia`, ascending."""
-        return np.linalg.eigvalsh(self.inertia)
-
-
-_Moments = tuple[float, np.ndarray, np.ndarray]  # mass, first moment (3,), second moment ∫ x xᵀ (3, 3)
-
-
-def _solid_moments(poly: Polyhedron) -> _Moments:
-    """Volume, first moment and second moment ∫ x xᵀ dV of the solid."""
-    return _solid_moments_of(poly.vertices[poly.triangles])
-
-
-def _solid_moments_of(v: np.ndarray) -> _Moments:
-    """The same for the closed surface of outward triangles `v` ((t, 3, 3), corners of each)."""
-    # tetrahedra (0, a, b, c)
-    det = np.einsum("ij,ij->i", v[:, 0], _cross(v[:, 1], v[:, 2]))
-    volume = det.sum() / 6
-    first = (det[:, None] * v.sum(axis=1)).sum(axis=0) / 24
-    a = v.transpose(0, 2, 1)  # columns are the tetrahedron's vertices
-    second = np.einsum("t,tij,jk,tlk->il", det, a, _CANONICAL, a)
-    return float(volume), first, second
-
-
-def _sheet_moments(v: np.ndarray, weight: np.ndarray | float = 1.0) -> _Moments:
-    """Area, first and second moment of triangles `v` (t, 3, 3), each weighted (area density)."""
-    area = 0.5 * np.linalg.norm(_cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1) * weight
-    s = v.sum(axis=1)
-    first = (area[:, None] * s).sum(axis=0) / 3
-    second = np.einsum("t,tki,tkj->ij", area, v, v) + np.einsum("t,ti,tj->ij", area, s, s)
-    return float(area.sum()), first, second / 12
-
-
-def _shell_moments_of(v: np.ndarray) -> _Moments:
-    """Area, first moment and second moment ∫ x xᵀ dA of the triangles `v` ((t, 3, 3), corners of each)."""
-    return _sheet_moments(v)
-
-
-def _shell_moments(poly: Polyhedron) -> _Moments:
-    """Area, first moment and second moment ∫ x xᵀ dA of the surface."""
-    return _shell_moments_of(poly.vertices[poly.triangles])
-
-
-def _point_moments(mass: float, at: np.ndarray) -> _Moments:
-    return float(mass), mass * at, mass * np.outer(at, at)
-
-
-def _combine(*terms: tuple[float, _Moments]) -> _Moments:
-    """Σ weight · moments."""
-    mass = sum(w * m[0] for w, m in terms)
-    first = sum(w * m[1] for w, m in terms)
-    second = sum(w * m[2] for w, m in terms)
-    return float(mass), first, second
-
-
-def _properties(mass: float, first: np.ndarray, second: np.ndarray) -> MassProperties:
-    center = first / mass
-    second_c = second - mass * np.outer(center, center)
-    inertia = np.trace(second_c) * np.eye(3) - second_c
-    return MassProperties(mass, center, 0.5 * (inertia + inertia.T))
 
 
 def inset(poly: Polyhedron, distance: float | np.ndarray) -> Polyhedron | None:
@@ -482,20 +208,20 @@ def tab_polygons(poly: Polyhedron, tabs: tuple[TabShape, ...], mm_per_unit: floa
     return out
 
 
-def _paper_moments(poly: Polyhedron, fill: Fill, mm_per_unit: float, tabs: tuple[TabShape, ...]) -> _Moments:
+def _paper_moments(poly: Polyhedron, fill: Fill, mm_per_unit: float, tabs: tuple[TabShape, ...]) -> Moments:
     """Card area (model units²) and its moments: faces, tabs behind them, glue between."""
     t = fill.card_thickness_mm / mm_per_unit
     tri, face = poly.vertices[poly.triangles], poly.triangle_face
-    terms = [(1.0, _sheet_moments(tri - 0.5 * t * poly.normals[face][:, None, :]))]
+    terms = [(1.0, sheet_moments(tri - 0.5 * t * poly.normals[face][:, None, :]))]
     if tabs:
         quads = tab_polygons(poly, tabs, mm_per_unit)
         shift = poly.normals[[tb.glued for tb in tabs]][:, None, :]
         halves = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
         shift = np.concatenate([shift, shift])
-        terms.append((1.0, _sheet_moments(halves - 1.5 * t * shift)))
+        terms.append((1.0, sheet_moments(halves - 1.5 * t * shift)))
         if fill.glue_g_m2 > 0:
-            terms.append((fill.glue_g_m2 / fill.card_g_m2, _sheet_moments(halves - t * shift)))
-    return _combine(*terms)
+            terms.append((fill.glue_g_m2 / fill.card_g_m2, sheet_moments(halves - t * shift)))
+    return combine(*terms)
 
 
 # ----------------------------------------------------------------------
@@ -594,36 +320,36 @@ def _clip(body: _Hull, normal: np.ndarray, offset: float) -> _Hull | None:
 
 def _print_moments(
     poly: Polyhedron, fill: Fill, mm_per_unit: float, bed: int, labels: tuple[LabelMass, ...]
-) -> _Moments:
+) -> Moments:
     """Full-density volume (model units³) and its moments of a print with walls, skins, infill and labels."""
     depth = wall_depths(poly, fill, mm_per_unit, bed)
-    outer = _solid_moments(poly)
+    outer = solid_moments(poly)
     core = _halfspace_hull(
         poly.normals, poly.offsets - depth, float(np.ptp(poly.vertices, axis=0).max()), poly.centroid
     )
     hollow = 1 - fill.infill
     terms = [(1.0, outer)]
     if core is not None:  # otherwise the walls meet: it prints solid
-        terms.append((-hollow, _solid_moments(core)))
+        terms.append((-hollow, solid_moments(core)))
         for part in _small_layers(poly, core, fill, mm_per_unit, bed):  # infill there turns solid
-            terms.append((hollow, _solid_moments(part)))
+            terms.append((hollow, solid_moments(part)))
     for label in labels:
         n = np.asarray(label.normal, dtype=float)
         c = np.asarray(label.centroid_mm, dtype=float) / mm_per_unit
         d = label.depth_mm / mm_per_unit
         volume = label.area_mm2 * label.depth_mm / mm_per_unit**3
         if label.emboss:  # raised text, printed solid
-            terms.append((1.0, _point_moments(volume, c + 0.5 * d * n)))
+            terms.append((1.0, point_moments(volume, c + 0.5 * d * n)))
             continue
-        terms.append((-1.0, _point_moments(volume, c - 0.5 * d * n)))  # the pocket
+        terms.append((-1.0, point_moments(volume, c - 0.5 * d * n)))  # the pocket
         # The pocket's floor and its sides are surfaces of the print too: the slicer fills the layers next
         # to them solid, widened into the infill by the skin margin, one depth of the pocket deeper than
         # the wall under a plain face.
         if core is not None:
             area, at = label.footprint(fill.skin_margin_mm)
             wrap = area * label.depth_mm / mm_per_unit**3
-            terms.append((hollow, _point_moments(wrap, at / mm_per_unit - (depth[label.face] + 0.5 * d) * n)))
-    return _combine(*terms)
+            terms.append((hollow, point_moments(wrap, at / mm_per_unit - (depth[label.face] + 0.5 * d) * n)))
+    return combine(*terms)
 
 
 def mass_properties(
@@ -647,7 +373,7 @@ def mass_properties(
         Physical size of one model unit (turns card, wall and layer
         thicknesses into model units).
     tabs : tuple of TabShape, optional
-        Paper: the glue tabs; default those of the net :func:`diefab.made.bodies.tab_shapes`
+        Paper: the glue tabs; default those of the net :func:`diefab.made.unfold.tab_shapes`
         lays out for `poly` (ignored when ``fill.tabs`` is false).
     bed : int, optional
         Print: the face on the bed (default :func:`bed_face`).
@@ -656,20 +382,18 @@ def mass_properties(
     """
     fill = fill or Fill()
     if fill.kind == "solid":
-        return _properties(*_solid_moments(poly))
+        return properties(*solid_moments(poly))
     if fill.kind == "shell":
-        return _properties(*_shell_moments(poly))
+        return properties(*shell_moments(poly))
     if fill.kind == "paper":
         if not fill.tabs:
             tabs = ()
         elif tabs is None:
-            from diefab.made.bodies import tab_shapes
-
             tabs = tab_shapes(poly, mm_per_unit, fill.tab_mm)
-        return _properties(*_paper_moments(poly, fill, mm_per_unit, tuple(tabs)))
+        return properties(*_paper_moments(poly, fill, mm_per_unit, tuple(tabs)))
     if bed is None:
         bed = bed_face(poly)
-    return _properties(*_print_moments(poly, fill, mm_per_unit, bed, tuple(labels)))
+    return properties(*_print_moments(poly, fill, mm_per_unit, bed, tuple(labels)))
 
 
 def mesh_mass_properties(mesh: ClosedMesh, fill: Fill | None = None, *, mm_per_unit: float = 1.0) -> MassProperties:
@@ -685,30 +409,13 @@ def mesh_mass_properties(mesh: ClosedMesh, fill: Fill | None = None, *, mm_per_u
     fill = fill or Fill()
     v = mesh.corners
     if fill.kind == "solid":
-        return _properties(*_solid_moments_of(v))
+        return properties(*solid_moments_of(v))
     if fill.kind == "shell":
-        return _properties(*_shell_moments_of(v))
+        return properties(*shell_moments_of(v))
     if fill.kind == "paper":  # card sheets on the surface (the mesh's own net has no tabs)
-        return _properties(*_shell_moments_of(v))
-    solid, surface = _solid_moments_of(v), _shell_moments_of(v)
+        return properties(*shell_moments_of(v))
+    solid, surface = solid_moments_of(v), shell_moments_of(v)
     wall = fill.wall_thickness_mm / mm_per_unit
     if wall * surface[0] >= solid[0]:  # walls meet: the print is solid
-        return _properties(*solid)
-    return _properties(*(fill.infill * a + (1 - fill.infill) * wall * b for a, b in zip(solid, surface)))
-
-
-def stated(props: MassProperties, center=None, inertia=None) -> MassProperties:
-    """`props` with a stated centre of mass and, optionally, inertia per unit mass (model units).
-
-    Parameters
-    ----------
-    center : (3,) float, optional
-        Replaces the centre of mass; the inertia tensor is kept (it is the
-        body's about its own centre of mass) unless `inertia` is given.
-    inertia : (3, 3) float, optional
-        Inertia tensor about the centre of mass divided by the mass,
-        model units²: multiplied by the body's mass.
-    """
-    c = props.center if center is None else np.asarray(center, dtype=float)
-    i = props.inertia if inertia is None else props.mass * np.asarray(inertia, dtype=float)
-    return MassProperties(props.mass, c, i)
+        return properties(*solid)
+    return properties(*(fill.infill * a + (1 - fill.infill) * wall * b for a, b in zip(solid, surface)))

@@ -3,17 +3,13 @@
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, replace
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
 
 import numpy as np
 
 from diefab.core.errors import FabricationError
 
-if TYPE_CHECKING:
-    from diefab.made.unfold import Net
-
-__all__ = ["PAGES", "Page", "pack_copies", "parse_page", "shelf"]
+__all__ = ["PAGES", "Page", "parse_page", "shelf"]
 
 #: Page sizes in millimetres (portrait).
 PAGES = {
@@ -88,37 +84,3 @@ def shelf(sizes, printable) -> dict[int, tuple[int, np.ndarray]]:
         placement[k] = (page_no, np.array([x, y]))
         x, shelf = x + w + PIECE_GAP, max(shelf, h)
     return placement
-
-
-def pack_copies(net: Net, copies: int) -> tuple[Net, ...]:
-    """`copies` copies of `net`, their pieces packed together onto as few pages as the shelf packer finds.
-
-    Each copy is a :class:`Net` of its own (same faces, tabs and letters,
-    other positions); ``max(n.n_pages for n in result)`` pages in all.
-    """
-    if isinstance(copies, bool) or not isinstance(copies, (int, np.integer)) or copies < 1:
-        raise FabricationError(f"copies={copies!r} must be a whole number >= 1")
-    if copies == 1:
-        return (net,)
-    boxes = []  # (copy, piece, page, lo, size)
-    for c in range(copies):
-        for piece in range(net.n_pieces):
-            members = np.flatnonzero(net.face_piece == piece)
-            pts = np.concatenate(
-                [net.faces[f] for f in members] + [t.polygon for t in net.tabs if net.face_piece[t.face] == piece]
-            )
-            lo = pts.min(axis=0)
-            boxes.append((c, piece, lo, pts.max(axis=0) - lo))
-    placement = shelf([b[3] for b in boxes], net.page.printable)
-    corner = np.array([net.page.margin, net.page.margin])
-    moved: list[dict[int, tuple[int, np.ndarray]]] = [{} for _ in range(copies)]
-    for i, (c, piece, lo, _) in enumerate(boxes):
-        pg, at = placement[i]
-        moved[c][piece] = (pg, corner + at - lo)
-    out = []
-    for c in range(copies):
-        shift = [moved[c][int(p)] for p in net.face_piece]
-        faces = tuple(poly + shift[f][1] for f, poly in enumerate(net.faces))
-        tabs = tuple(replace(t, polygon=t.polygon + shift[t.face][1], page=shift[t.face][0]) for t in net.tabs)
-        out.append(replace(net, faces=faces, face_page=np.array([s[0] for s in shift]), tabs=tabs))
-    return tuple(out)

@@ -22,7 +22,7 @@ from diefab.geometry.flat import overlap, stack_polygons
 from diefab.geometry.polyhedron import Polyhedron
 from diefab.geometry.symmetry import Symmetries, off_axis
 from diefab.geometry.trees import edge_key, edge_lookup, face_ring
-from diefab.made.mass import TAB_MAX_FRACTION, TAB_TOP_FRACTION
+from diefab.made.fill import TAB_MAX_FRACTION, TAB_TOP_FRACTION
 
 #: Default glue-tab width, mm.
 TAB_WIDTH = 5.0

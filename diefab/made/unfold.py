@@ -40,8 +40,8 @@ from __future__ import annotations
 import heapq
 import math
 from collections import deque
-from dataclasses import dataclass, field
-from functools import cached_property
+from dataclasses import dataclass, field, replace
+from functools import cached_property, lru_cache
 
 import numpy as np
 
@@ -51,6 +51,7 @@ from diefab.geometry.flat import convex_hull, extents, fit_box, overlap, stack_p
 from diefab.geometry.polyhedron import Polyhedron
 from diefab.geometry.symmetry import Symmetries, symmetries
 from diefab.geometry.trees import all_trees, edge_key, edge_lookup, face_ring, heuristic_trees, spanning_tree_count
+from diefab.made.fill import TabShape
 from diefab.made.pages import Page, parse_page, shelf
 from diefab.made.tabs import (
     TAB_MIN_WIDTH,
@@ -64,7 +65,7 @@ from diefab.made.tabs import (
     tab_offset,
 )
 
-__all__ = ["Net", "unfold"]
+__all__ = ["Net", "net_tab_shapes", "pack_copies", "tab_shapes", "unfold"]
 
 #: Spanning trees are enumerated when there are at most this many.
 TREE_LIMIT = 20_000
@@ -648,3 +649,75 @@ def _letters(i: int) -> str:
         i, r = divmod(i - 1, 26)
         out = chr(65 + r) + out
     return out
+
+
+def pack_copies(net: Net, copies: int) -> tuple[Net, ...]:
+    """`copies` copies of `net`, their pieces packed together onto as few pages as the shelf packer finds.
+
+    Each copy is a :class:`Net` of its own (same faces, tabs and letters,
+    other positions); ``max(n.n_pages for n in result)`` pages in all.
+    """
+    if isinstance(copies, bool) or not isinstance(copies, (int, np.integer)) or copies < 1:
+        raise FabricationError(f"copies={copies!r} must be a whole number >= 1")
+    if copies == 1:
+        return (net,)
+    boxes = []  # (copy, piece, page, lo, size)
+    for c in range(copies):
+        for piece in range(net.n_pieces):
+            members = np.flatnonzero(net.face_piece == piece)
+            pts = np.concatenate(
+                [net.faces[f] for f in members] + [t.polygon for t in net.tabs if net.face_piece[t.face] == piece]
+            )
+            lo = pts.min(axis=0)
+            boxes.append((c, piece, lo, pts.max(axis=0) - lo))
+    placement = shelf([b[3] for b in boxes], net.page.printable)
+    corner = np.array([net.page.margin, net.page.margin])
+    moved: list[dict[int, tuple[int, np.ndarray]]] = [{} for _ in range(copies)]
+    for i, (c, piece, lo, _) in enumerate(boxes):
+        pg, at = placement[i]
+        moved[c][piece] = (pg, corner + at - lo)
+    out = []
+    for c in range(copies):
+        shift = [moved[c][int(p)] for p in net.face_piece]
+        faces = tuple(poly + shift[f][1] for f, poly in enumerate(net.faces))
+        tabs = tuple(replace(t, polygon=t.polygon + shift[t.face][1], page=shift[t.face][0]) for t in net.tabs)
+        out.append(replace(net, faces=faces, face_page=np.array([s[0] for s in shift]), tabs=tabs))
+    return tuple(out)
+
+
+# ----------------------------------------------------------------------
+# the tabs of a net, for the mass model
+
+
+def net_tab_shapes(net: Net) -> tuple[TabShape, ...]:
+    """The tabs of a laid-out net, as :class:`~diefab.made.fill.TabShape` on the die's edges."""
+    poly = net.poly
+    out = []
+    for tab in net.tabs:
+        ring = net.faces[tab.face]
+        p, q, far_q, far_p = tab.polygon
+        i = int(np.argmin(np.linalg.norm(ring - p, axis=1)))
+        n = len(ring)
+        a, b = int(poly.faces[tab.face][i]), int(poly.faces[tab.face][(i + 1) % n])
+        u = (q - p) / np.linalg.norm(q - p)
+        normal = np.array([-u[1], u[0]])
+        width = abs(float((far_p - p) @ normal))
+        lean_a = float((far_p - p) @ u) / width
+        lean_b = float((q - far_q) @ u) / width
+        faces = poly.edge_faces[tab.edge]
+        glued = int(faces[0] if faces[1] == tab.face else faces[1])
+        out.append(TabShape(a, b, glued, width, lean_a, lean_b))
+    return tuple(out)
+
+
+@lru_cache(maxsize=64)
+def _tabs_cached(key: bytes, faces: tuple, poly: Polyhedron, mm_per_unit: float, tab_mm: float):
+    return net_tab_shapes(unfold(poly, mm_per_unit, tab_width=tab_mm))
+
+
+def tab_shapes(poly: Polyhedron, mm_per_unit: float, tab_mm: float) -> tuple[TabShape, ...]:
+    """The glue tabs of the net of `poly` that ``diefab net`` lays out on A4 (none when `tab_mm` is 0)."""
+    if tab_mm == 0:
+        return ()
+    faces = tuple(tuple(int(v) for v in f) for f in poly.faces)
+    return _tabs_cached(poly.vertices.tobytes(), faces, poly, float(mm_per_unit), float(tab_mm))

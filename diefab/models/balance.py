@@ -25,7 +25,8 @@ import numpy as np
 
 from diefab.dice.design import Design, format_value
 from diefab.dice.families import family
-from diefab.made.mass import Fill, MassProperties
+from diefab.geometry.moments import MassProperties
+from diefab.made.fill import Fill
 from diefab.stats.goodness import tvd
 
 __all__ = ["TVD_SLACK", "Balance", "made_balance"]

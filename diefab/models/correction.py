@@ -108,7 +108,7 @@ def face_features(
     resting : (m,) bool
     """
     from diefab.made.mass import mass_properties
-    from diefab.models.fast import landing_probabilities, tipping_barriers
+    from diefab.models.chain import landing_probabilities, tipping_barriers
 
     center = np.asarray(center, dtype=float)
     m = len(poly.faces)
@@ -125,9 +125,9 @@ def face_features(
     _, _, face, start = poly._ring
     lowest = np.minimum.reduceat(barrier, start)
     omega = np.clip(solid_angles(poly, center), 0, None)
-    from diefab.models.fast import _topple_targets  # the share a transitional face passes on
+    from diefab.models.chain import topple_targets  # the share a transitional face passes on
 
-    solid = np.bincount(_topple_targets(poly, center, barrier, across), weights=omega / omega.sum(), minlength=m)
+    solid = np.bincount(topple_targets(poly, center, barrier, across), weights=omega / omega.sum(), minlength=m)
     height = poly.offsets - poly.normals @ center
     log_chain = np.log(np.clip(chain, _FLOOR, None))
     edges = np.diff(np.append(start, len(face))).astype(float)
@@ -329,7 +329,7 @@ class Correction:
         constants; `inertia` is the body's tensor about its centre of mass over
         its mass, which the chain takes (the features take the uniform solid's).
         """
-        from diefab.models.fast import landing_probabilities
+        from diefab.models.chain import landing_probabilities
 
         if chain is None:
             chain = landing_probabilities(poly, center, inertia=inertia, **self.chain)

@@ -77,7 +77,7 @@ True
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from functools import cache, cached_property
 from importlib import resources
@@ -86,227 +86,25 @@ import numpy as np
 
 from diefab.core.errors import DesignError
 from diefab.dice.families import GEM, gem_parameters
-from diefab.geometry.polyhedron import Polyhedron, face_margins, resting_faces, solid_angles
-from diefab.made.mass import Fill
+from diefab.geometry.polyhedron import Polyhedron, face_margins
+from diefab.made.fill import Fill
+from diefab.models.chain import landing_probabilities
+from diefab.models.correction import corrected
 
 __all__ = [
-    "AREA_POWER",
     "DISCREPANCY_FILE",
     "FILL_COORDINATES",
     "FILL_LAYERS",
-    "HEIGHT_WEIGHT",
-    "ROLL_POWER",
-    "TAU",
-    "TEMPERATURE",
     "DISCREPANCY_AT",
     "Discrepancy",
     "FillCorrection",
     "body_excess",
-    "calibrate",
     "fast_model",
     "fill_discrepancy",
     "fill_discrepancy_file",
     "gem_discrepancy",
-    "landing_probabilities",
     "made_gem_base",
-    "roll_retention",
-    "tipping_barriers",
 ]
-
-# Calibrated constants.  Fitted by
-#     python benchmarks/bench_fastmodel.py --calibrate
-# which minimizes the mean TVD to pybullet (default PhysicsSettings, 4,000
-# drops each, physics seed 0) over the first 20 random stable gems of the
-# training set, drawn uniformly in the box of a, b, c, d and e (design seed
-# 101), with adaptive Nelder--Mead (see :func:`calibrate`); the fit reached a
-# mean TVD of 0.0571 on those gems.  The rolling term was chosen by 5-fold
-# cross-validation over those training designs only (mean held-out TVD
-# 0.0649 against 0.0673 without it, on the gems as simulated by the previous
-# physics version).  On 20 *other* random gems at 30,000 drops each (design
-# seed 202) the chain alone has a median TVD of 0.042 (solid angles 0.177),
-# at about 0.35 ms per evaluation; on 20 more (design seed 303) 0.064.
-#: Energy scale of the tumbling, model units of height.
-TEMPERATURE = 0.0481
-#: How long the tumbling lasts, in units of the rate at zero barrier.
-TAU = 18.19
-#: Larger faces catch a tipping die: rates scale as (area ratio) ** AREA_POWER.
-AREA_POWER = 0.334
-#: Rolling over edges that keep the energy: rates scale as (energy retention) ** ROLL_POWER.
-ROLL_POWER = 2.019
-#: Resting lower is likelier: weight exp(-HEIGHT_WEIGHT * height above the lowest rest).
-HEIGHT_WEIGHT = 1.033
-
-
-#: Floor of the energy retention under a power (an edge that keeps nothing is still crossed by hops).
-_TINY = 1e-9
-
-
-def _neighbors(poly: Polyhedron) -> np.ndarray:
-    """(r,) int: for each directed edge of ``poly._ring``, the face across it."""
-    tail, head, face, _ = poly._ring
-    n = len(poly.vertices)
-    code = tail * n + head
-    order = np.argsort(code)
-    back = np.searchsorted(code[order], head * n + tail)
-    return face[order[back]]
-
-
-def tipping_barriers(poly: Polyhedron, center: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per directed edge of every face: barrier, direction share and the face across.
-
-    Returns
-    -------
-    barrier : (r,) float, model units
-        Height the centre of mass rises when the die, resting on the edge's
-        face, tips over the edge (negative when the face is unstable there).
-    share : (r,) float
-        Angle the edge subtends at the foot of the centre of mass in the
-        face, over 2 pi (they sum to 1 over a stable face's edges).
-    across : (r,) int
-        The neighbouring face across the edge.
-    """
-    center = np.asarray(center, dtype=float)
-    tail, head, face, _ = poly._ring
-    n = poly.normals[face]
-    height = poly.offsets[face] - n @ center
-    foot = center + height[:, None] * n
-    p0, p1 = poly.vertices[tail], poly.vertices[head]
-    edge = p1 - p0
-    cross = np.cross(center - p0, edge)
-    reach = np.linalg.norm(cross, axis=1) / np.linalg.norm(edge, axis=1)
-    a, b = p0 - foot, p1 - foot
-    share = np.arctan2(np.einsum("ij,ij->i", n, np.cross(a, b)), np.einsum("ij,ij->i", a, b)) / (2 * np.pi)
-    # The centre of mass beyond the edge line (seen from inside the face): no barrier, it falls.
-    inward = np.cross(n, edge)
-    side = np.einsum("ij,ij->i", foot - p0, inward)
-    barrier = np.where(side >= 0, reach - height, -(reach - height))
-    return barrier, share, _neighbors(poly)
-
-
-def roll_retention(poly: Polyhedron, center: np.ndarray, inertia: np.ndarray | None = None) -> np.ndarray:
-    """(r,) float in [0, 1]: per directed edge, the kinetic-energy share a die keeps rolling over it.
-
-    ``((k**2 + r**2 cos phi) / (k**2 + r**2)) ** 2`` (clipped at 0), with
-    ``phi`` the angle between the normals of the edge's two faces, ``r`` the
-    distance from ``center`` to the edge line and ``k**2`` the moment of
-    inertia about the axis through ``center`` parallel to the edge, per unit
-    mass: of `inertia` (the body's tensor about its centre of mass over its
-    mass, model units²) if given, else of the uniform solid moved to
-    ``center``.  The same on both sides of an edge.
-    """
-    center = np.asarray(center, dtype=float)
-    tail, head, face, _ = poly._ring
-    if inertia is None:
-        from diefab.made.mass import mass_properties
-
-        props = mass_properties(poly)
-        shift = center - props.center  # parallel-axis theorem: inertia about `center`
-        inertia = (props.inertia + props.mass * (shift @ shift * np.eye(3) - np.outer(shift, shift))) / props.mass
-    edge = poly.vertices[head] - poly.vertices[tail]
-    edge /= np.linalg.norm(edge, axis=1)[:, None]
-    k2 = np.einsum("ij,jk,ik->i", edge, np.asarray(inertia, dtype=float), edge)
-    r2 = np.sum(np.cross(center - poly.vertices[tail], edge) ** 2, axis=1)
-    cos = np.einsum("ij,ij->i", poly.normals[face], poly.normals[_neighbors(poly)])
-    return np.clip((k2 + r2 * cos) / (k2 + r2), 0, None) ** 2
-
-
-def _topple_targets(poly: Polyhedron, center: np.ndarray, barrier: np.ndarray, across: np.ndarray) -> np.ndarray:
-    """(m,) int: the stable face each face ends on by quasi-static toppling (itself if stable)."""
-    m = len(poly.faces)
-    _, _, face, start = poly._ring
-    step = np.arange(m)
-    for f in np.flatnonzero(~resting_faces(poly, center)):
-        # over the edge the centre of mass lies furthest beyond (most negative barrier)
-        lo, hi = start[f], start[f + 1] if f + 1 < m else len(face)
-        step[f] = across[lo + int(np.argmin(barrier[lo:hi]))]
-    final = step.copy()
-    for _ in range(m):  # follow the descent graph; it cannot be longer than m
-        nxt = step[final]
-        if np.array_equal(nxt, final):
-            break
-        final = nxt
-    return final
-
-
-def landing_probabilities(
-    poly: Polyhedron,
-    center: np.ndarray,
-    *,
-    temperature: float = TEMPERATURE,
-    tau: float = TAU,
-    area_power: float = AREA_POWER,
-    roll_power: float = ROLL_POWER,
-    height_weight: float = HEIGHT_WEIGHT,
-    inertia: np.ndarray | None = None,
-) -> np.ndarray:
-    """(m,) float: probability of coming to rest on each face (see the module docstring).
-
-    Parameters
-    ----------
-    poly : Polyhedron
-    center : (3,) float
-        Centre of mass, model units.
-    temperature : float
-        Energy scale T of the barrier weighting, model units (> 0).
-    tau : float
-        Duration of the tumbling (>= 0); 0 gives the toppled solid angles.
-    area_power : float
-        Exponent of the area ratio (destination over origin) in the tipping rate.
-    roll_power : float
-        Exponent of the edge's energy retention (:func:`roll_retention`) in the tipping rate.
-    height_weight : float
-        Per model unit: the result is weighted by ``exp(-height_weight * h)``,
-        h the height of the centre of mass resting on the face.
-    inertia : (3, 3) float, optional
-        The body's inertia tensor about its centre of mass over its mass,
-        model units² (:func:`roll_retention`); default the uniform solid's.
-    """
-    m = len(poly.faces)
-    omega = solid_angles(poly, center)
-    p0 = np.clip(omega, 0, None)
-    p0 = p0 / p0.sum()
-    barrier, share, across = tipping_barriers(poly, center)
-    _, _, face, _ = poly._ring
-    target = _topple_targets(poly, center, barrier, across)
-    flowed = np.bincount(target, weights=p0, minlength=m)
-    stable = target == np.arange(m)
-    # rates between stable faces; tipping onto an unstable face continues to where it topples
-    ok = stable[face]
-    dest = target[across[ok]]
-    rate = np.clip(share[ok], 0, None) * np.exp(-np.clip(barrier[ok], 0, None) / temperature)
-    rate *= (poly.areas[dest] / poly.areas[face[ok]]) ** area_power
-    if roll_power:
-        rate *= np.maximum(roll_retention(poly, center, inertia)[ok], _TINY) ** roll_power
-    q = np.zeros((m, m))
-    np.add.at(q, (face[ok], dest), rate)
-    np.fill_diagonal(q, 0.0)
-    q -= np.diag(q.sum(axis=1))
-    p = _evolve(flowed, tau * q)
-    height = poly.offsets - poly.normals @ np.asarray(center, dtype=float)
-    p = np.clip(p, 0, None) * np.exp(-height_weight * (height - height.min()))
-    return p / p.sum()
-
-
-def _evolve(p0: np.ndarray, generator: np.ndarray) -> np.ndarray:
-    """``p0 @ expm(generator)`` for a rate matrix, by uniformization.
-
-    With ``lam`` the largest exit rate, ``expm(G) = sum_k Poisson(k; lam) P^k``
-    with the stochastic matrix ``P = I + G / lam``: every term is >= 0, and
-    for a 9-face die it is far faster than a general matrix exponential.
-    """
-    lam = float(-np.diag(generator).min(initial=0.0))
-    if lam <= 0:
-        return p0.copy()
-    if lam > 200:  # exp(-lam) would underflow: evolve in two halves
-        return _evolve(_evolve(p0, generator / 2), generator / 2)
-    step = np.eye(len(p0)) + generator / lam
-    weight = np.exp(-lam)
-    term, out = p0.copy(), weight * p0
-    for k in range(1, int(lam + 12 * np.sqrt(lam) + 30)):
-        term = term @ step
-        weight *= lam / k
-        out += weight * term
-    return out
 
 
 def fast_model(poly: Polyhedron, center: np.ndarray, *, fill: Fill | None = None,
@@ -338,8 +136,6 @@ def fast_model(poly: Polyhedron, center: np.ndarray, *, fill: Fill | None = None
         Inertia tensor about the centre of mass over the mass, model units²
         (default: the uniform solid's).
     """
-    from diefab.models.correction import corrected
-
     params = gem_parameters(poly)
     if params is not None:
         margins = face_margins(poly, center)
@@ -937,49 +733,3 @@ def fill_discrepancy(kind: str) -> FillCorrection | None:
 def _packaged_layer(kind: str) -> FillCorrection | None:
     path = resources.files("diefab").joinpath("data", fill_discrepancy_file(kind))
     return FillCorrection.from_json(path.read_text()) if path.is_file() else None
-
-
-def calibrate(
-    designs: Sequence,
-    counts: Sequence[np.ndarray],
-    x0=(TEMPERATURE, TAU, AREA_POWER, HEIGHT_WEIGHT, ROLL_POWER),
-    *,
-    maxfev: int = 3000,
-) -> dict[str, float]:
-    """Fit the model's five constants to simulated face counts by least mean TVD.
-
-    Nelder--Mead (adaptive) on (log T, log tau, area power, height weight,
-    roll power), from `x0` with a simplex of 0.3 along each coordinate.
-
-    Parameters
-    ----------
-    designs : sequence of Design
-    counts : sequence of (m,) int
-        Simulated landings per face of each design (polyhedron order).
-    x0 : (5,) float
-        Start: temperature, tau, area_power, height_weight, roll_power.
-    maxfev : int
-        Most evaluations of the mean TVD.
-
-    Returns
-    -------
-    dict with ``temperature``, ``tau``, ``area_power``, ``height_weight``,
-    ``roll_power`` and the fitted ``mean_tvd``.
-    """
-    from scipy.optimize import minimize
-
-    cases = [(d.polyhedron, d.mass_properties().center, np.asarray(c) / np.sum(c)) for d, c in zip(designs, counts)]
-
-    def constants(x: np.ndarray) -> dict[str, float]:
-        return {"temperature": float(np.exp(x[0])), "tau": float(np.exp(x[1])), "area_power": float(x[2]),
-                "height_weight": float(x[3]), "roll_power": float(x[4])}  # fmt: skip
-
-    def loss(x: np.ndarray) -> float:
-        kw = constants(x)
-        return float(np.mean([0.5 * np.abs(landing_probabilities(poly, c, **kw) - q).sum() for poly, c, q in cases]))
-
-    start = np.array([np.log(x0[0]), np.log(x0[1]), x0[2], x0[3], x0[4]])
-    simplex = np.vstack([start, start + 0.3 * np.eye(len(start))])
-    options = {"xatol": 1e-3, "fatol": 1e-6, "maxfev": maxfev, "adaptive": True, "initial_simplex": simplex}
-    res = minimize(loss, start, method="Nelder-Mead", options=options)
-    return {**constants(res.x), "mean_tvd": float(res.fun)}

@@ -24,8 +24,9 @@ import numpy as np
 
 from diefab.core.errors import DesignError
 from diefab.dice.design import Design
+from diefab.geometry.moments import MassProperties
 from diefab.geometry.polyhedron import Polyhedron, resting_faces, solid_angles
-from diefab.made.mass import Fill, MassProperties
+from diefab.made.fill import Fill
 from diefab.models.basins import RestBasins
 
 __all__ = [

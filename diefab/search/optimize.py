@@ -31,8 +31,9 @@ from diefab.core.errors import DesignError
 from diefab.dice.design import Design
 from diefab.dice.families import family
 from diefab.dice.readings import KINDS, unreadable
+from diefab.geometry.moments import MassProperties, stated
 from diefab.geometry.polyhedron import Polyhedron, face_margins
-from diefab.made.mass import MassProperties, mass_properties, stated
+from diefab.made.mass import mass_properties
 from diefab.models.probabilities import MODELS, model_probabilities
 from diefab.stats.goodness import jsd, pearson_divergence, tvd
 
@@ -180,7 +181,7 @@ class Problem:
         fill = self.design.fill
         if fill.kind != "paper" or not fill.tabs:
             return None
-        from diefab.made.bodies import tab_shapes
+        from diefab.made.unfold import tab_shapes
 
         return tab_shapes(self.design.polyhedron, self.design.mm_per_unit, fill.tab_mm)
 

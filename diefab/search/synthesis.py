@@ -51,7 +51,8 @@ from diefab.dice.families import family as get_family
 from diefab.dice.readings import unreadable
 from diefab.dice.targets import Target
 from diefab.geometry.polyhedron import resting_faces
-from diefab.made.mass import Fill, mass_properties
+from diefab.made.fill import Fill
+from diefab.made.mass import mass_properties
 from diefab.models.probabilities import MODELS, model_probabilities, value_probabilities
 from diefab.search.optimize import INFEASIBLE, optimize_design
 from diefab.search.symmetric import (
