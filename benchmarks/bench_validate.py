@@ -50,7 +50,7 @@ def plain_outcomes(design, settings, seed: int, n: int, workers: int) -> np.ndar
 
 
 def worker_rss_mb() -> list[float]:
-    from diefab.physics.simulate import simulate as physics
+    from diefab.physics import simulate as physics
 
     out = []
     for proc in getattr(physics._POOL, "_processes", {}).values():

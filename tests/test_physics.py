@@ -314,7 +314,7 @@ def test_cli_json_and_plot(tmp_path, run):
 
 
 def test_cli_interrupt_reports_finished_drops(gem, monkeypatch, run):
-    from diefab.physics.simulate import simulate as physics
+    from diefab.physics import simulate as physics
 
     def interrupted(*args, **kwargs):
         raise physics.SimulationInterrupted(123, 1000)
