@@ -69,11 +69,31 @@ def measure(checkout: Path, per_family: int, seed: int) -> dict:
     return json.loads(run.stdout)
 
 
+def command_seconds(checkout: Path, args: list[str], runs: int) -> float:
+    """Median CPU seconds (user + system, children included) of ``python -m diefab ARGS`` in `checkout`."""
+    env = {**os.environ, "PYTHONPATH": str(checkout)}
+    times = []
+    for _ in range(runs):
+        before = os.times()
+        subprocess.run([sys.executable, "-m", "diefab", *args], env=env, cwd=checkout, capture_output=True, check=True)
+        after = os.times()
+        times.append(after.children_user - before.children_user + after.children_system - before.children_system)
+    return float(np.median(times))
+
+
+COMMANDS = [
+    ["predict", "fudge-gem", "--fill", "print", "--model", "fast"],
+    ["predict", "d20", "--fill", "print", "--model", "fast"],
+    ["optimize", "fudge-gem", "--fill", "print", "--model", "fast", "--out", "{tmp}"],
+]
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--baseline", type=Path, help="a checkout of an earlier commit to compare with")
     parser.add_argument("--per-family", type=int, default=50)
     parser.add_argument("--seed", type=int, default=2026)
+    parser.add_argument("--runs", type=int, default=3, help="runs of each command (median CPU time)")
     args = parser.parse_args()
     start = time.perf_counter()
     now = measure(HERE, args.per_family, args.seed)
@@ -98,7 +118,18 @@ def main() -> None:
     for kind in ("paper", "print"):
         t, tb = now["seconds"][kind], base["seconds"][kind]
         print(f"{kind:6s} {worst[kind]:14.2e} {t:13.2f} {tb:9.2f} {tb / t:8.1f}x")
-    print(f"dice whose outcome (figures or error) differs: {errors}; {time.perf_counter() - start:.0f} s in all")
+    print(f"dice whose outcome (figures or error) differs: {errors}")
+    import tempfile
+
+    print(f"{'command (CPU s, median of ' + str(args.runs) + ')':58s} {'this':>7s} {'baseline':>9s} {'speed-up':>9s}")
+    for command in COMMANDS:
+        with tempfile.TemporaryDirectory() as tmp:
+            argv = [a.format(tmp=tmp) for a in command]
+            t = command_seconds(HERE, argv, args.runs)
+            tb = command_seconds(args.baseline.resolve(), argv, args.runs)
+        shown = " ".join(a for a in command if a not in ("--out", "{tmp}"))
+        print(f"diefab {shown:51s} {t:7.2f} {tb:9.2f} {tb / t:8.1f}x")
+    print(f"{time.perf_counter() - start:.0f} s in all")
 
 
 if __name__ == "__main__":
