@@ -15,15 +15,9 @@ import pytest
 
 from diefab.core.errors import FabricationError
 from diefab.dice.design import load_design
-from diefab.fabricate.stl import (
-    build_solid,
-    cut_labels,
-    flat_face_probabilities,
-    inlay_stl_bytes,
-    mesh_moments,
-    stl_bytes,
-    threemf_bytes,
-)
+from diefab.fabricate.engrave import cut_labels
+from diefab.fabricate.formats import inlay_stl_bytes, stl_bytes, threemf_bytes
+from diefab.fabricate.stl import build_solid, flat_face_probabilities, mesh_moments
 from diefab.geometry.polyhedron import solid_angles
 from diefab.made.fill import Fill
 from diefab.made.mass import inset, mass_properties
