@@ -22,8 +22,9 @@ def _graph():
 
 def test_layers_contract_is_kept():
     pytest.importorskip("importlinter")
-    run = subprocess.run([sys.executable, "-c", "from importlinter.cli import lint_imports; raise SystemExit(lint_imports())"],
-                         cwd=ROOT, capture_output=True, text=True, env={"PYTHONPATH": str(ROOT), "PATH": ""})  # fmt: skip
+    code = "from importlinter.cli import lint_imports; raise SystemExit(lint_imports())"
+    env = {"PYTHONPATH": str(ROOT), "PATH": ""}
+    run = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, env=env)
     assert run.returncode == 0, run.stdout + run.stderr
 
 
