@@ -21,8 +21,8 @@ import time
 import numpy as np
 
 from diefab.dice.design import load_design
-from diefab.models.basins import RestBasins
 from diefab.models import probabilities as models
+from diefab.models.basins import RestBasins
 from diefab.search.optimize import Problem
 
 DICE = ("fudge-gem", "fudge-gem-paper", "d6", "d20")
