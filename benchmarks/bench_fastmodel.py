@@ -259,6 +259,7 @@ def learn(training: TrainingSet, drops: int, seed: int, design_seed: int = TRAIN
     held-out TVD is within 1 % of the least (more smoothing, same accuracy).
     A fill's correction is learned by ``learn_fill_correction.py``.
     """
+    from diefab.models import chain
     from diefab.models import fast as fastmodel
     from diefab.physics.simulate import PhysicsSettings
 
@@ -280,7 +281,7 @@ def learn(training: TrainingSet, drops: int, seed: int, design_seed: int = TRAIN
         "seed": seed,
         "physics": physics_version(),
         "settings": PhysicsSettings().as_dict(),
-        "chain": {k: getattr(fastmodel, k.upper()) for k in names},
+        "chain": {k: getattr(chain, k.upper()) for k in names},
         "cv": {f"{k:g}": {"median_tvd": round(v[0], 5), "mean_tvd": round(v[1], 5)} for k, v in scores.items()},
     }
     name = fastmodel.DISCREPANCY_FILE

@@ -13,7 +13,7 @@ from diefab.dice.families import GEM, gem_parameters, gem_polyhedron
 from diefab.geometry.polyhedron import Polyhedron, face_margins
 from diefab.made.fill import Fill
 from diefab.made.mass import mass_properties
-from diefab.models import fast as fastmodel
+from diefab.models import chain as chain_model
 from diefab.models.chain import landing_probabilities, roll_retention, tipping_barriers
 from diefab.models.fast import Discrepancy, fast_model, gem_discrepancy
 from diefab.models.probabilities import MODELS, value_probabilities
@@ -267,7 +267,7 @@ def test_packaged_discrepancy_matches_the_chain_and_the_family():
     # learned against the chain constants in the code: refitting the chain needs relearning
     chain = fit.info["chain"]
     for name in ("temperature", "tau", "area_power", "roll_power", "height_weight"):
-        assert chain[name] == getattr(fastmodel, name.upper())
+        assert chain[name] == getattr(chain_model, name.upper())
     # and against the chain as the code computes it now, on the physics version the validator runs
     from diefab.physics.world import OUTCOME_VERSION
 
