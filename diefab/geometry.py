@@ -375,15 +375,17 @@ def _merge_coplanar(points: np.ndarray, simplices: np.ndarray, equations: np.nda
     """Group hull triangles by plane and return each group's boundary polygon, outward CCW."""
     normals = equations[:, :3]
     groups: list[list[int]] = []
+    refs = np.empty_like(equations)  # each group's first triangle's plane, compared with all at once
     for t in range(len(simplices)):
-        for g in groups:
-            ref = equations[g[0]]
-            if 1 - normals[t] @ ref[:3] < tol.COPLANAR and abs(equations[t, 3] - ref[3]) < tol.COPLANAR * (
-                1 + abs(ref[3])
-            ):
-                g.append(t)
-                break
+        r = refs[: len(groups)]
+        same = (1 - r[:, :3] @ normals[t] < tol.COPLANAR) & (
+            np.abs(equations[t, 3] - r[:, 3]) < tol.COPLANAR * (1 + np.abs(r[:, 3]))
+        )
+        hit = np.flatnonzero(same)
+        if hit.size:
+            groups[hit[0]].append(t)
         else:
+            refs[len(groups)] = equations[t]
             groups.append([t])
     faces = []
     for g in groups:
