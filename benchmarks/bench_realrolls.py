@@ -20,7 +20,8 @@ short still window (``--energy-fraction 0``: still on a resting face for
 ``--settle-time`` 0.1 s), and the TVD of each to the real counts is printed.
 
 The paper's die as made (a paper model of its final gem, 405 real rolls,
-Table 2) is the first row of every table.
+Table 2) is the first row of every table; ``--guard`` adds the published
+rolls of 15 steel square cuboids (:mod:`diefab.published`).
 
 With ``--guard`` it computes, in this process, the figures the real-dice
 guard test (``tests/test_realrolls_guard.py``) checks: each landing model's
@@ -194,7 +195,7 @@ def compare_landing(files: list[Path], args) -> None:
 
 def guard(args) -> None:
     """Print (and with ``--record`` write) the guard's figures: TVD per die and model, and their means."""
-    dice = load_real_dice(args.data)
+    dice = load_real_dice(args.data, published=True)
     if args.dice:
         dice = [d for d in dice if d.name in args.dice.split(",")]
     started = time.perf_counter()
@@ -206,6 +207,12 @@ def guard(args) -> None:
         print(f"{d.name:<13} {d.n:>5} {noise_tvd(d, 4000):>8.4f} " + " ".join(f"{scores[d.name][c]:>11.4f}"
                                                                          for c in columns))  # fmt: skip
     mean = mean_scores(dice, scores)
+    groups = {"the paper's die and the shared dice": [d for d in dice if not d.name.startswith("cuboid-")],
+              "the published cuboids": [d for d in dice if d.name.startswith("cuboid-")]}  # fmt: skip
+    for label, group in groups.items():
+        if group:
+            m = mean_scores(group, scores)
+            print(f"mean, {label} ({len(group)}): " + ", ".join(f"{c} {m[c]:.4f}" for c in columns))
     print(f"{'mean':<13} {'':>5} {'':>8} " + " ".join(f"{mean[c]:>11.4f}" for c in columns))
     print(f"\nTVD to the real counts; validate: {args.sims} drops per die, seed {args.seed}, default physics, "
           f"{time.perf_counter() - started:.0f} s ({os.cpu_count()} cores, shared machine)")  # fmt: skip

@@ -81,8 +81,9 @@ def paper_die() -> RealDie:
     return RealDie("paper-gem", parse_design(PAPER_DIE_TOML, source="the paper's die"), np.array(TABLE_2))
 
 
-def load_real_dice(folder: str | Path | None, *, paper: bool = True) -> list[RealDie]:
-    """The paper's die (if `paper`) and every die of the real-rolls `folder` (``*.json``, sorted by name).
+def load_real_dice(folder: str | Path | None, *, paper: bool = True, published: bool = False) -> list[RealDie]:
+    """The paper's die (if `paper`), every die of the real-rolls `folder` (``*.json``, sorted by name) and,
+    if `published`, the published tables shipped with diefab (:func:`diefab.published.square_cuboid_dice`).
 
     A `folder` that is None or does not exist contributes no die.
     """
@@ -91,6 +92,10 @@ def load_real_dice(folder: str | Path | None, *, paper: bool = True) -> list[Rea
     dice = [paper_die()] if paper else []
     if folder is not None and Path(folder).is_dir():
         dice += [realrolls_die(p) for p in sorted(Path(folder).glob("*.json"))]
+    if published:
+        from .published import square_cuboid_dice
+
+        dice += square_cuboid_dice()
     return dice
 
 
