@@ -29,6 +29,11 @@ stone (its own surface).
    family out), plus a normal prior toward the default (``--prior``
    standard deviations of vigor; ``inf``: none).  The held-out die's own
    drops at the chosen point score it: they played no part in the choice.
+3. **Throw or table.**  The same over the union of the vigor grid and the
+   capture grid (vigor 1), and once more with the fit restricted to dice
+   rolled on the held-out die's own surface (:data:`SURFACE`; no other die
+   on it: the default physics), the columns ``loo-surface`` and
+   ``lofo-surface``.
 
 Printed: TVD to the real frequencies per die (mirror-image outcomes up to
 relabelling), the sampling noise of the real counts (the TVD a perfect
@@ -72,8 +77,16 @@ FAMILY = {"paper-gem": "gem", "binom2": "prisms", "binom3": "prisms", "binom4": 
 CAPTURE_GRID = tuple(round((i / 10) ** 2, 9) for i in range(11))
 
 
+#: What each die was rolled on: a fitted throw and table carry over only to dice on the same surface.
+SURFACE = {"paper-gem": "the paper's table", "binom3_stone": "stone"}
+
+
 def family(name: str) -> str:
     return FAMILY.get(name, name)
+
+
+def surface(name: str) -> str:
+    return SURFACE.get(name, "the source's table")
 
 
 def fit_index(dice, probs, train: list[int], prior_sd: float, x: np.ndarray, x0: float) -> int:
@@ -173,6 +186,7 @@ def main() -> int:
     full = fit_index(dice, probs, list(range(len(dice))), args.prior, vigor, 1.0)
     print(f"  in-sample (all dice): vigor {vigor[full]:g}, mean TVD {grid_tvd[:, full].mean():.4f}")
     goal(dice, cols, ref, noise, default)
+    throw_or_table(dice, sims, vigor, probs, grid_tvd, ref, noise, default, args.prior)
     print(f"\n{time.perf_counter() - started:.0f} s in all; {sims.dropped} drops simulated now "
           f"({sims.seconds:.0f} s), the rest cached in {CACHE.relative_to(ROOT)}")  # fmt: skip
     shutdown_pool()
@@ -233,13 +247,68 @@ def printed_table_cv(dice, sims, noise) -> None:
               f"{score(i, shipped):.4f} (noise {noise[i]:.4f})")  # fmt: skip
 
 
+def throw_or_table(dice, sims, vigor, probs, grid_tvd, ref, noise, default, prior_sd) -> None:
+    """Cross-validation over the union of the vigor grid (capture 0) and the capture grid (the default throw).
+
+    Candidates have coordinates (vigor, capture); the prior is normal toward the
+    default (1, 0) with sd `prior_sd` in each.  The capture grid's drops are the
+    2000 seed-0 drops ``bench_calibrate.py --free capture --grid 11`` cached.
+    """
+    from bench_calibrate import fingerprint, settings_key
+
+    caps = [c for c in CAPTURE_GRID if c > 0]
+    if any((fingerprint(d), settings_key(PhysicsSettings(capture_energy=c)), 2000, 0) not in sims.table
+           for d in dice for c in caps):  # fmt: skip
+        print("\n3. skipped: the capture grid is not cached")
+        return
+    coords = [(float(v), 0.0) for v in vigor] + [(1.0, c) for c in caps]
+    cand_p = [list(probs[i]) for i in range(len(dice))]
+    cand_t = [list(grid_tvd[i]) for i in range(len(dice))]
+    for i, d in enumerate(dice):
+        for c in caps:
+            counts = sims.counts_at(d, PhysicsSettings(capture_energy=c), 2000, 0, [c])
+            cand_p[i].append(smoothed(counts))
+            cand_t[i].append(value_tvd(d, counts / counts.sum()))
+    x = np.array(coords)
+    n = len(dice)
+
+    def pick(train: list[int]) -> int:
+        total = np.zeros(len(x))
+        for j in train:
+            total += [deviance(dice[j].counts, dice[j].symmetrized(p)) for p in cand_p[j]]
+        if math.isfinite(prior_sd):
+            total += (((x - np.array([1.0, 0.0])) / prior_sd) ** 2).sum(axis=1)
+        return int(np.argmin(total))
+
+    loo = [pick([j for j in range(n) if j != i]) for i in range(n)]
+    lofo = [pick([j for j in range(n) if family(dice[j].name) != family(dice[i].name)]) for i in range(n)]
+    default_index = coords.index((1.0, 0.0))
+
+    def on_surface(i: int, train: list[int]) -> int:
+        """The fit of the `train` dice on die i's surface; the default when no other die was rolled on it."""
+        train = [j for j in train if surface(dice[j].name) == surface(dice[i].name)]
+        return pick(train) if train else default_index
+
+    loo_s = [on_surface(i, [j for j in range(n) if j != i]) for i in range(n)]
+    lofo_s = [on_surface(i, [j for j in range(n) if family(dice[j].name) != family(dice[i].name)]) for i in range(n)]
+    cols = {"default": default, "loo": [cand_t[i][loo[i]] for i in range(n)],
+            "lofo": [cand_t[i][lofo[i]] for i in range(n)], "loo-surface": [cand_t[i][loo_s[i]] for i in range(n)],
+            "lofo-surface": [cand_t[i][lofo_s[i]] for i in range(n)]}  # fmt: skip
+    print(f"\n3. Throw or table: the vigor grid (capture 0) and the capture grid (default throw) as one set of "
+          f"{len(x)} candidates, prior sd {prior_sd:g} toward the default in each")  # fmt: skip
+    table(dice, {**cols, **ref}, noise)
+    for how, idx in (("loo", loo), ("lofo", lofo), ("loo-surface", loo_s), ("lofo-surface", lofo_s)):
+        print(f"  {how} (vigor, capture) per die: "
+              + ", ".join(f"{d.name} ({x[idx[i]][0]:g}, {x[idx[i]][1]:g})" for i, d in enumerate(dice)))  # fmt: skip
+    goal(dice, cols, ref, noise, default)
+
+
 def goal(dice, cols, ref, noise, default) -> None:
     """The goal's checks on the leave-one-die-out and leave-one-family-out columns."""
-    best_ref = [np.nanmin([ref["ours"][i], ref["bullet"][i]]) for i in range(len(dice))]
-    with_ref = [i for i in range(len(dice)) if np.isfinite(best_ref[i])]
+    with_ref = [i for i in range(len(dice)) if np.isfinite(ref["ours"][i]) and np.isfinite(ref["bullet"][i])]
     stone = [i for i, d in enumerate(dice) if d.name == "binom3_stone"]
     print("\n  goal checks:")
-    for how in ("loo", "lofo"):
+    for how in [c for c in cols if c.startswith(("loo", "lofo"))]:
         held = cols[how]
         mean_ref_dice = np.mean([held[i] for i in with_ref])
         best_source = min(np.mean([ref[k][i] for i in with_ref]) for k in ("ours", "bullet"))
