@@ -3,7 +3,7 @@
     nice -n 10 python benchmarks/bench_heldout.py [--drops 400] [--seed 1] [--workers 2] [--prior 0.5]
 
 The dice: the paper's die as made (Table 2) and every die of
-``../shared/realrolls`` (:func:`diefab.fidelity.load_real_dice`), in four
+``../shared/realrolls`` (:func:`diefab.search.fidelity.load_real_dice`), in four
 families: the paper's gem (a paper model on the paper's table), the
 printed prisms (binom2, binom3, binom4), the printed figurines (armadillo,
 dragon, kitten), all on the source's table, and the binom3 prism rolled on
@@ -20,7 +20,7 @@ stone (its own surface).
    capture grid ``bench_calibrate.py --free capture --grid 11`` cached
    (fitted on seed-0 drops, the held-out die scored on seed-2 drops).
 2. **A throw fitted across dice.**  The throw's vigor
-   (:func:`diefab.throw.throw_settings`: 0 a die released at rest just
+   (:func:`diefab.physics.throw.throw_settings`: 0 a die released at rest just
    above the table with low friction and no bounce, the source's own
    Bullet set-up; 1 diefab's default throw) on a grid of ``--vigor``
    points; each die dropped at each.  For each held-out die the vigor is
@@ -60,11 +60,11 @@ sys.path.insert(0, str(Path(__file__).parent))
 
 from bench_calibrate import Simulations  # noqa: E402
 
-from diefab.calibrate import deviance, smoothed  # noqa: E402
-from diefab.fidelity import load_real_dice, noise_tvd, value_tvd  # noqa: E402
-from diefab.physics import PhysicsSettings, shutdown_pool  # noqa: E402
-from diefab.profiles import list_profiles, load_profile, read_profile  # noqa: E402
-from diefab.throw import throw_settings  # noqa: E402
+from diefab.physics.profiles import list_profiles, load_profile, read_profile  # noqa: E402
+from diefab.physics.simulate import PhysicsSettings, shutdown_pool  # noqa: E402
+from diefab.physics.throw import throw_settings  # noqa: E402
+from diefab.search.calibrate import deviance, smoothed  # noqa: E402
+from diefab.search.fidelity import load_real_dice, noise_tvd, value_tvd  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 REALROLLS = ROOT / ".." / "shared" / "realrolls"

@@ -1,7 +1,7 @@
 """diefab against real rolls: every die of the real-rolls data through the command line as shipped.
 
 For each die (one JSON file of the data folder) the reader
-(:mod:`diefab.realrolls`) writes its design TOML; then
+(:mod:`diefab.physics.realrolls`) writes its design TOML; then
 
     diefab predict DIE.toml --model solid-angle|basins|fast --json
     diefab validate DIE.toml --sims N --seed S --json
@@ -21,7 +21,7 @@ short still window (``--energy-fraction 0``: still on a resting face for
 
 The paper's die as made (a paper model of its final gem, 405 real rolls,
 Table 2) is the first row of every table; ``--guard`` adds the published
-rolls of 15 steel square cuboids (:mod:`diefab.published`).
+rolls of 15 steel square cuboids (:mod:`diefab.search.published`).
 
 With ``--guard`` it computes, in this process, the figures the real-dice
 guard test (``tests/test_realrolls_guard.py``) checks: each landing model's
@@ -52,7 +52,8 @@ from pathlib import Path
 
 import numpy as np
 
-from diefab.fidelity import (
+from diefab.physics.realrolls import RealRolls, load_real_rolls
+from diefab.search.fidelity import (
     LANDING_MODELS,
     PAPER_DIE_TOML,
     TABLE_2,
@@ -62,7 +63,6 @@ from diefab.fidelity import (
     mean_scores,
     noise_tvd,
 )
-from diefab.realrolls import RealRolls, load_real_rolls
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / ".." / "shared" / "realrolls"

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from diefab.published import published_source, square_cuboid, square_cuboid_dice
+from diefab.search.published import published_source, square_cuboid, square_cuboid_dice
 
 
 def test_every_published_row_gives_a_die_with_its_rolls_and_its_fraction():

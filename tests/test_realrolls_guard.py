@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from diefab.fidelity import LANDING_MODELS, SimulationCache, load_real_dice, model_tvd, simulated_tvd, value_tvd
+from diefab.search.fidelity import LANDING_MODELS, SimulationCache, load_real_dice, model_tvd, simulated_tvd, value_tvd
 
 ROOT = Path(__file__).resolve().parents[1]
 REALROLLS = ROOT / ".." / "shared" / "realrolls"
@@ -64,8 +64,8 @@ def test_simulation_is_no_worse_on_real_dice_than_recorded(dice, recorded):
 
 def test_the_fast_model_is_no_worse_than_the_chain_it_corrects_on_real_dice(dice):
     """The learned corrections were tuned on simulated dice; on real designed dice they must not lose to the chain."""
-    from diefab.fastmodel import landing_probabilities
-    from diefab.models import to_values
+    from diefab.models.fast import landing_probabilities
+    from diefab.models.probabilities import to_values
 
     chain, fast = [], []
     for d in dice:

@@ -7,10 +7,10 @@ import json
 import numpy as np
 import pytest
 
-from diefab.design import Design, parse_design
-from diefab.errors import DesignError
-from diefab.models import face_probabilities
-from diefab.realrolls import load_real_rolls
+from diefab.core.errors import DesignError
+from diefab.dice.design import Design, parse_design
+from diefab.models.probabilities import face_probabilities
+from diefab.physics.realrolls import load_real_rolls
 
 BOX_MM = np.array([20.0, 16.0, 12.0])
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from diefab.errors import PhysicsError
-from diefab.physics import PhysicsSettings
-from diefab.throw import GENTLE, VIGOROUS, throw_settings
+from diefab.core.errors import PhysicsError
+from diefab.physics.simulate import PhysicsSettings
+from diefab.physics.throw import GENTLE, VIGOROUS, throw_settings
 
 
 def test_vigor_one_is_the_default_throw_and_zero_the_gentle_release():
