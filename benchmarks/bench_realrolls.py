@@ -62,6 +62,7 @@ from diefab.search.fidelity import (
     load_real_dice,
     mean_scores,
     noise_tvd,
+    simulation_key,
 )
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -199,8 +200,8 @@ def guard(args) -> None:
     if args.dice:
         dice = [d for d in dice if d.name in args.dice.split(",")]
     started = time.perf_counter()
-    scores = guard_scores(dice, drops=args.sims, seed=args.seed, cache=SimulationCache(SIM_CACHE),
-                          workers=args.workers)  # fmt: skip
+    cache = SimulationCache(SIM_CACHE)
+    scores = guard_scores(dice, drops=args.sims, seed=args.seed, cache=cache, workers=args.workers)
     columns = [*MODELS, "validate"]
     print(f"{'die':<13} {'rolls':>5} {'noise':>8} " + " ".join(f"{c:>11}" for c in columns))
     for d in dice:
@@ -220,7 +221,8 @@ def guard(args) -> None:
         old = json.loads(GUARD.read_text())
         print("recorded: " + ", ".join(f"{c} {old['mean'][c]:.4f}" for c in columns if c in old["mean"]))
     if args.record:
-        from diefab.files import atomic_write
+        from diefab.core.files import atomic_write
+        from diefab.physics.simulate import PhysicsSettings
 
         data = {"tolerance": GUARD_TOLERANCE, "drops": args.sims, "seed": args.seed,
                 "dice": [d.name for d in dice], "mean": {c: round(mean[c], 5) for c in columns},
@@ -228,6 +230,10 @@ def guard(args) -> None:
                 "command": f"python benchmarks/bench_realrolls.py --guard --sims {args.sims} --seed {args.seed} "
                            "--record"}  # fmt: skip
         atomic_write(GUARD, json.dumps(data, indent=1) + "\n")
+        # the cache keeps only this run's simulations: entries of older code can never be read again
+        used = {simulation_key(d, PhysicsSettings.from_mapping(d.design.physics), args.sims, args.seed) for d in dice}
+        atomic_write(SIM_CACHE, json.dumps({k: v for k, v in cache.entries.items() if k in used}, indent=0,
+                                           sort_keys=True) + "\n")  # fmt: skip
         print(f"recorded in {GUARD.relative_to(ROOT)}")
 
 
