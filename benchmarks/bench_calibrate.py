@@ -75,7 +75,7 @@ from pathlib import Path
 import numpy as np
 
 from diefab.core.errors import DiefabError
-from diefab.dice.design import design_to_toml, parse_design
+from diefab.dice.design import design_to_toml
 from diefab.physics.realrolls import grouped_tvd as grouped
 from diefab.physics.simulate import shutdown_pool
 from diefab.search.calibrate import (
@@ -89,32 +89,18 @@ from diefab.search.calibrate import (
     simulate_die,
     smoothed,
 )
+from diefab.search.fidelity import paper_die
 
 HERE = Path(__file__).parent
-TABLE_2 = np.array([0, 20, 48, 80, 89, 83, 66, 17, 2])  # the paper's real rolls, values -4..4
 FREE = ("restitution", "friction", "rolling_friction", "spin", "drop_height", "capture")
 #: What each die is made of and what it was rolled on: a calibration carries over only within one material.
 MATERIAL = {"paper-gem": "paper model on the paper's table", "binom3_stone": "printed, on stone"}
 PRINTED = "printed, on the source's table"
 SLOW_FACES = 50  # dice with more hull faces than this drop --slow-drops times per candidate
-PAPER_DIE = """
-name = "paper-gem"
-description = "the paper's die as made: a paper model (shell) of the gem a=1.18 b=0.52 c=0.72 d=1.41"
-family = "gem"
-target = "4df"
-size_mm = 30.0
-[params]
-a = 1.18
-b = 0.52
-c = 0.72
-d = 1.41
-[fill]
-kind = "shell"
-"""
 
 
 def load_dice(folder: Path) -> list[RealDie]:
-    dice = [RealDie("paper-gem", parse_design(PAPER_DIE, source="paper die"), TABLE_2)]
+    dice = [paper_die()]
     for path in sorted(folder.glob("*.json")):
         try:
             dice.append(realrolls_die(path))
@@ -187,7 +173,10 @@ class Simulations:
         from diefab.search.calibrate import settings_at
 
         values = [round(float(v), 9) for v in spec.values(x)]
-        settings = settings_at(spec.base, spec.names, values)
+        return self.counts_at(die, settings_at(spec.base, spec.names, values), drops, seed, values)
+
+    def counts_at(self, die: RealDie, settings, drops: int, seed: int, values=()) -> np.ndarray:
+        """(k,) float: value counts of `die` simulated at `settings` (cached)."""
         key = (fingerprint(die), settings_key(settings), int(drops), int(seed))
         if key not in self.table:
             r = simulate_die(die, settings, int(drops), int(seed), self.workers)
@@ -195,7 +184,7 @@ class Simulations:
             self.dropped += int(drops)
             self.seconds += r["seconds"]
             with self.path.open("a") as log:
-                log.write(json.dumps({"die": die.name, "design": key[0], "values": values, "drops": key[2],
+                log.write(json.dumps({"die": die.name, "design": key[0], "values": list(values), "drops": key[2],
                                       "seed": key[3], "settings": settings.as_dict(), "counts": r["counts"]})
                           + "\n")  # fmt: skip
         return np.array(self.table[key], dtype=float)

@@ -19,11 +19,25 @@ face's basin below its barrier, or still on it for 1 s) and once with a plain
 short still window (``--energy-fraction 0``: still on a resting face for
 ``--settle-time`` 0.1 s), and the TVD of each to the real counts is printed.
 
+The paper's die as made (a paper model of its final gem, 405 real rolls,
+Table 2) is the first row of every table; ``--guard`` adds the published
+rolls of 15 steel square cuboids (:mod:`diefab.search.published`).
+
+With ``--guard`` it computes, in this process, the figures the real-dice
+guard test (``tests/test_realrolls_guard.py``) checks: each landing model's
+TVD per die and ``validate`` at ``--sims`` drops (seed ``--seed``, default
+physics), simulated counts cached in ``benchmarks/results/
+realrolls-sim-cache.json`` under a key of the design, settings, drops, seed
+and the simulation's code; ``--record`` writes their means over the dice
+to ``benchmarks/results/realrolls-guard.json``, the figures the test
+holds every model to (worse by more than ``tolerance`` fails).
+
 Usage::
 
     nice -n 10 python benchmarks/bench_realrolls.py [--sims 2000] [--workers 2] [--data DIR] [--out DIR]
         [--physics PROFILE] [--capture-energy C]    # validate under a profile / with quasi-static capture
     nice -n 10 python benchmarks/bench_realrolls.py --landing [--dice armadilo_d3,dragon_d3,kitten_d3]
+    nice -n 10 python benchmarks/bench_realrolls.py --guard --sims 400 [--record]   # the guard's figures
 """
 
 from __future__ import annotations
@@ -38,10 +52,26 @@ from pathlib import Path
 
 import numpy as np
 
-from diefab.physics.realrolls import load_real_rolls
+from diefab.physics.realrolls import RealRolls, load_real_rolls
+from diefab.search.fidelity import (
+    LANDING_MODELS,
+    PAPER_DIE_TOML,
+    TABLE_2,
+    SimulationCache,
+    guard_scores,
+    load_real_dice,
+    mean_scores,
+    noise_tvd,
+    simulation_key,
+)
 
-DATA = Path("/work/shared/realrolls")
-MODELS = ("solid-angle", "basins", "fast")
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT / ".." / "shared" / "realrolls"
+MODELS = LANDING_MODELS
+GUARD = ROOT / "benchmarks" / "results" / "realrolls-guard.json"
+SIM_CACHE = ROOT / "benchmarks" / "results" / "realrolls-sim-cache.json"
+#: How much worse than its recorded mean TVD a model may get before the guard fails.
+GUARD_TOLERANCE = 0.005
 
 
 def cli(*args: str) -> tuple[dict, float]:
@@ -65,8 +95,13 @@ def main() -> None:
     parser.add_argument("--dice", default="", help="Comma-separated die names (default: every die).")
     parser.add_argument("--physics", default=None, help="Physics profile for validate (default: the defaults).")
     parser.add_argument("--capture-energy", default=None, help="validate --capture-energy (default: off).")
+    parser.add_argument("--guard", action="store_true", help="The real-dice guard's figures (in this process).")
+    parser.add_argument("--record", action="store_true", help="--guard: record them as the guard's figures.")
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
+    if args.guard:
+        guard(args)
+        return
     files = sorted(args.data.glob("*.json"))
     if args.dice:
         files = [f for f in files if f.stem in args.dice.split(",")]
@@ -78,10 +113,13 @@ def main() -> None:
     columns = ["noise", *MODELS, "validate", "ours", "bullet"]
     rows, times = [], {m: 0.0 for m in (*MODELS, "validate")}
     print(f"{'die':<13} {'rolls':>5} {'faces':>5} {'rest':>4} " + " ".join(f"{c:>11}" for c in columns))
-    for path in files:
-        rolls = load_real_rolls(path)
-        for name, content in rolls.design_files().items():
-            (args.out / name).write_text(content)
+    (args.out / "paper-gem.toml").write_text(PAPER_DIE_TOML)
+    paper = RealRolls(name="paper-gem", outcomes=tuple(range(-4, 5)), counts=np.array(TABLE_2))
+    for path in [None, *files] if not args.dice or "paper-gem" in args.dice.split(",") else files:
+        rolls = paper if path is None else load_real_rolls(path)
+        if path is not None:
+            for name, content in rolls.design_files().items():
+                (args.out / name).write_text(content)
         design = str(args.out / f"{rolls.name}.toml")
         row = {"noise": rolls.noise_tvd()}
         info = {}
@@ -154,6 +192,49 @@ def compare_landing(files: list[Path], args) -> None:
         "window: --energy-fraction 0 (still 0.1 s on a resting face). gain: window minus rule (positive: the rule "
         f"agrees better with the real rolls). lost: drops cocked or unsettled. {os.cpu_count()} cores (shared machine)"
     )
+
+
+def guard(args) -> None:
+    """Print (and with ``--record`` write) the guard's figures: TVD per die and model, and their means."""
+    dice = load_real_dice(args.data, published=True)
+    if args.dice:
+        dice = [d for d in dice if d.name in args.dice.split(",")]
+    started = time.perf_counter()
+    cache = SimulationCache(SIM_CACHE)
+    scores = guard_scores(dice, drops=args.sims, seed=args.seed, cache=cache, workers=args.workers)
+    columns = [*MODELS, "validate"]
+    print(f"{'die':<13} {'rolls':>5} {'noise':>8} " + " ".join(f"{c:>11}" for c in columns))
+    for d in dice:
+        print(f"{d.name:<13} {d.n:>5} {noise_tvd(d, 4000):>8.4f} " + " ".join(f"{scores[d.name][c]:>11.4f}"
+                                                                         for c in columns))  # fmt: skip
+    mean = mean_scores(dice, scores)
+    groups = {"the paper's die and the shared dice": [d for d in dice if not d.name.startswith("cuboid-")],
+              "the published cuboids": [d for d in dice if d.name.startswith("cuboid-")]}  # fmt: skip
+    for label, group in groups.items():
+        if group:
+            m = mean_scores(group, scores)
+            print(f"mean, {label} ({len(group)}): " + ", ".join(f"{c} {m[c]:.4f}" for c in columns))
+    print(f"{'mean':<13} {'':>5} {'':>8} " + " ".join(f"{mean[c]:>11.4f}" for c in columns))
+    print(f"\nTVD to the real counts; validate: {args.sims} drops per die, seed {args.seed}, default physics, "
+          f"{time.perf_counter() - started:.0f} s ({os.cpu_count()} cores, shared machine)")  # fmt: skip
+    if GUARD.is_file():
+        old = json.loads(GUARD.read_text())
+        print("recorded: " + ", ".join(f"{c} {old['mean'][c]:.4f}" for c in columns if c in old["mean"]))
+    if args.record:
+        from diefab.core.files import atomic_write
+        from diefab.physics.simulate import PhysicsSettings
+
+        data = {"tolerance": GUARD_TOLERANCE, "drops": args.sims, "seed": args.seed,
+                "dice": [d.name for d in dice], "mean": {c: round(mean[c], 5) for c in columns},
+                "per_die": {d.name: {c: round(scores[d.name][c], 5) for c in columns} for d in dice},
+                "command": f"python benchmarks/bench_realrolls.py --guard --sims {args.sims} --seed {args.seed} "
+                           "--record"}  # fmt: skip
+        atomic_write(GUARD, json.dumps(data, indent=1) + "\n")
+        # the cache keeps only this run's simulations: entries of older code can never be read again
+        used = {simulation_key(d, PhysicsSettings.from_mapping(d.design.physics), args.sims, args.seed) for d in dice}
+        atomic_write(SIM_CACHE, json.dumps({k: v for k, v in cache.entries.items() if k in used}, indent=0,
+                                           sort_keys=True) + "\n")  # fmt: skip
+        print(f"recorded in {GUARD.relative_to(ROOT)}")
 
 
 if __name__ == "__main__":

@@ -22,6 +22,11 @@ Usage::
         --families ngem,prism,bipyramid,trapezohedron,cuboid,freeform,convex --workers 1
     python benchmarks/learn_correction.py --fit                # refit the constants, cross-validate, write
     python benchmarks/learn_correction.py --fit --keep-chain   # the same on the packaged constants (quicker)
+    python benchmarks/learn_correction.py --domain             # only record the training range in the table
+
+``--fit`` also records the training faces' range of standardized features,
+the correction's domain (:meth:`diefab.models.correction.Correction.covers`);
+``--domain`` records it in the packaged table without refitting anything.
 """
 
 from __future__ import annotations
@@ -132,7 +137,7 @@ class TrainingSet:
 def fit(path: Path = TRAINING, maxfev: int = 600, keep_chain: bool = False) -> None:
     """Refit the chain's constants, choose expansion and penalty by cross-validation, write the table.
 
-    The chain's five constants are refitted (:func:`diefab.models.fast.calibrate`,
+    The chain's five constants are refitted (:func:`diefab.models.chain.calibrate`,
     least mean TVD, at most `maxfev` evaluations) to every training die, then
     the correction on top of that chain is cross-validated: the folds hold
     dice out of the correction's fit, not of the constants' (5 numbers fitted
@@ -141,14 +146,15 @@ def fit(path: Path = TRAINING, maxfev: int = 600, keep_chain: bool = False) -> N
     """
     from diefab.core.files import atomic_write
     from diefab.dice.families.sampling import record_design
-    from diefab.models import chain, correction
+    from diefab.models import chain as chain_model
+    from diefab.models import correction
 
     runs = read_runs(path)
     t = time.perf_counter()
     if keep_chain:  # the packaged table's constants, whatever features it was fitted on
         constants = dict(json.loads((DATA / correction.CORRECTION_FILE).read_text())["chain"])
     else:
-        constants = chain.calibrate([record_design(r) for r in runs], [np.array(r["face_counts"]) for r in runs],
+        constants = chain_model.calibrate([record_design(r) for r in runs], [np.array(r["face_counts"]) for r in runs],
                                         maxfev=maxfev)  # fmt: skip
         print(f"chain constants refitted to {len(runs)} dice in {time.perf_counter() - t:.0f} s: "
               + ", ".join(f"{k} {v:.4g}" for k, v in constants.items()), flush=True)  # fmt: skip
@@ -186,6 +192,20 @@ def fit(path: Path = TRAINING, maxfev: int = 600, keep_chain: bool = False) -> N
     atomic_write(DATA / correction.CORRECTION_FILE, table.to_json())
 
 
+def record_domain(path: Path = TRAINING) -> None:
+    """Write the training faces' feature range into the packaged table (weights and constants unchanged)."""
+    from dataclasses import replace
+
+    from diefab.core.files import atomic_write
+    from diefab.models.correction import CORRECTION_FILE, Correction
+
+    table = Correction.from_json((DATA / CORRECTION_FILE).read_text())
+    data = TrainingSet(read_runs(path), table.chain)
+    z = (np.vstack(data.features) - table.mean) / table.scale
+    atomic_write(DATA / CORRECTION_FILE, replace(table, low=z.min(axis=0), high=z.max(axis=0)).to_json())
+    print(f"domain of {len(data.runs)} training dice ({len(z)} faces) written to {DATA / CORRECTION_FILE}")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--collect", action="store_true")
@@ -196,7 +216,11 @@ def main(argv=None) -> int:
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--families", default="", help="--collect: comma-separated families to draw in turn (default: all)")
     ap.add_argument("--keep-chain", action="store_true", help="--fit: keep the packaged chain constants")
+    ap.add_argument("--domain", action="store_true", help="Record the training range in the packaged table only.")
     args = ap.parse_args(argv)
+    if args.domain:
+        record_domain()
+        return 0
     if not (args.collect or args.fit):
         ap.error("nothing to do: give --collect, --fit or both")
     if args.designs < 1 or args.drops < 1:

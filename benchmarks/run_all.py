@@ -36,6 +36,8 @@ BENCHMARKS = [
         "--free capture --grid 3 --drops 100 --slow-drops 30 --predict-drops 100 --prior inf --cache /dev/null".split(),
     ),
     ("bench_realrolls.py", [], ["--sims", "200"]),
+    ("bench_realrolls.py", ["--guard", "--sims", "400"], ["--guard", "--sims", "400"]),  # cached: the guard's figures
+    ("bench_heldout.py", [], []),  # cached: prints in half a minute
     ("bench_basins.py", [], []),
     ("bench_many_faces.py", [], ["--sims", "40"]),
 ]

@@ -161,3 +161,34 @@ def test_features_of_mirror_image_faces_are_equal():
     up = d.polyhedron.normals[:, 1] > 0
     assert resting.all()
     assert np.ptp(x[up], axis=0).max() < 1e-9 and np.ptp(x[~up], axis=0).max() < 1e-9
+
+
+def test_the_correction_holds_only_on_dice_like_its_training_dice(dice):
+    """Outside its domain (a transitional face, features beyond the training range) the chain alone is returned."""
+    fit = packaged_correction()
+    assert fit.low is not None and np.all(fit.low < 0) and np.all(fit.high > 0)  # standardized: the mean is inside
+    back = Correction.from_json(fit.to_json())
+    assert back.low.tolist() == fit.low.tolist() and back.high.tolist() == fit.high.tolist()
+    # random dice of the training families rest on every face and lie in the domain: corrected, not the chain
+    inside = 0
+    for d in dice:
+        poly, c = d.polyhedron, d.mass_properties().center
+        chain = landing_probabilities(poly, c, **fit.chain)
+        x, resting = face_features(poly, c, chain)
+        inside += fit.covers(x, resting)
+    assert inside >= len(dice) - 2
+    # a cube with one corner cut off a little: the small cut is a transitional face, which no training die had
+    from diefab.geometry.polyhedron import Polyhedron
+
+    corners = [[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1) if (x, y, z) != (1, 1, 1)]
+    poly = Polyhedron.from_points(corners + [[0.9, 1, 1], [1, 0.9, 1], [1, 1, 0.9]])
+    center = poly.centroid + np.array([-0.3, 0.0, 0.0])
+    chain = landing_probabilities(poly, center, **fit.chain)
+    x, resting = face_features(poly, center, chain)
+    assert not resting.all() and not fit.covers(x, resting)
+    expected = np.where(resting, chain, 0) / chain[resting].sum()
+    assert np.allclose(corrected(poly, center), expected, atol=1e-12)
+    # a feature far beyond the training range is outside too
+    far = x.copy()
+    far[:, 0] = fit.mean[0] + fit.scale[0] * (fit.high[0] + 5)
+    assert not fit.covers(far, np.ones(len(far), bool))

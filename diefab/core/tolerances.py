@@ -6,6 +6,9 @@ below are in those units unless the name says otherwise.
 
 #: Largest distance of a face vertex from the face's best-fit plane.
 PLANARITY = 1e-9
+#: Millimetres a listed face's vertices may lie off its plane in a design by
+#: default (a printed die's mesh is planar to a few hundredths of a mm).
+FACE_FLATNESS_MM = 0.05
 #: How far outside a face plane another vertex may lie and still count as convex.
 CONVEXITY = 1e-9
 #: Two unit normals closer than this (1 - cos) are taken as the same plane

@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from diefab.core import tolerances as tol
 from diefab.core.errors import DesignError, GeometryError
 from diefab.dice.families import family
 from diefab.dice.families.base import default_length
@@ -130,7 +131,10 @@ class Design:
         Hull triangles of a ``mesh`` (or ``convex`` without ``faces``)
         design whose vertices lie within this many millimetres of one plane
         become one face (default: :data:`MESH_MERGE_MM` for meshes, exact
-        coplanarity for vertex lists).
+        coplanarity for vertex lists).  For a ``convex`` design that lists
+        its ``faces``: how many millimetres a face's vertices may lie off the
+        face's plane (default :data:`~diefab.tolerances.FACE_FLATNESS_MM`;
+        :attr:`face_flatness_mm` reports each face's distance).
     """
 
     name: str
@@ -199,8 +203,6 @@ class Design:
         t = self.merge_tolerance_mm
         if t is not None and not (_number(t) and 0 <= t <= 10):
             raise DesignError(f"merge_tolerance_mm={t!r} must be a number of millimetres in [0, 10]")
-        if t is not None and self.family == "convex" and self.faces is not None:
-            raise DesignError("merge_tolerance_mm applies to a hull: leave it out of a design that lists 'faces'")
         if self.center_of_mass is not None:
             c = self.center_of_mass
             if not (isinstance(c, (list, tuple)) and len(c) == 3 and all(map(_number, c))):
@@ -253,7 +255,7 @@ class Design:
             return fam.polyhedron(self.params)
         try:
             if self.family == "convex" and self.faces is not None:
-                return Polyhedron(np.array(self.vertices, dtype=float), self.faces)
+                return self._listed_polyhedron()
             mm = MESH_MERGE_MM if self.merge_tolerance_mm is None and self.family == "mesh" else self.merge_tolerance_mm
             mesh = self.family == "mesh"
             points = self.body_mesh.vertices if mesh else np.array(self.vertices, dtype=float)
@@ -272,6 +274,25 @@ class Design:
             return poly
         except GeometryError as exc:
             raise DesignError(f"design {self.name!r}: {exc}") from exc
+
+    def _listed_polyhedron(self) -> Polyhedron:
+        """The listed faces, each planar within ``merge_tolerance_mm`` (refused beyond, naming face and distance)."""
+        mm = tol.FACE_FLATNESS_MM if self.merge_tolerance_mm is None else float(self.merge_tolerance_mm)
+        vertices = np.array(self.vertices, dtype=float)
+        exact = Polyhedron(vertices, self.faces, flatness=np.inf)  # topology and planes, flatness checked below
+        mm_per_unit = self.size_mm / default_length(exact)[0]
+        flat_mm = exact.face_flatness * mm_per_unit
+        k = int(np.argmax(flat_mm))
+        if flat_mm[k] > mm:
+            raise GeometryError(f"face {exact.names[k]} is {flat_mm[k]:.3g} mm off its plane, beyond the "
+                                f"{mm:g} mm that merge_tolerance_mm allows")  # fmt: skip
+        return Polyhedron(vertices, self.faces, flatness=mm / mm_per_unit)
+
+    @property
+    def face_flatness_mm(self) -> dict[str, float]:
+        """Face name -> largest distance of its vertices from its plane, mm (0 for exact geometry)."""
+        poly = self.polyhedron
+        return dict(zip(poly.names, (poly.face_flatness * self.mm_per_unit).tolist()))
 
     @cached_property
     def transitional_faces(self) -> tuple[str, ...]:

@@ -50,6 +50,12 @@ class Polyhedron:
         Vertex indices of each face, counter-clockwise seen from outside.
     names : sequence of str, optional
         One name per face; ``f1 .. fm`` by default.
+    flatness : float, optional
+        Largest distance (model units) a vertex may lie off its face's plane,
+        or outside another face's, for faces measured off a real object (a
+        printed die's mesh); the planes are the faces' best fits
+        (:attr:`face_flatness` reports each face's distance).  By default the
+        faces must be planar to rounding (:data:`~diefab.tolerances.PLANARITY`).
 
     Raises
     ------
@@ -61,6 +67,7 @@ class Polyhedron:
     vertices: np.ndarray
     faces: tuple[np.ndarray, ...]
     names: tuple[str, ...] = ()
+    flatness: float | None = None
 
     def __post_init__(self) -> None:
         vertices = np.array(self.vertices, dtype=float)
@@ -194,6 +201,7 @@ class Polyhedron:
         object.__setattr__(new, "vertices", vertices)
         object.__setattr__(new, "faces", self.faces)
         object.__setattr__(new, "names", self.names)
+        object.__setattr__(new, "flatness", self.flatness)
         for key in _TOPOLOGY:
             new.__dict__[key] = getattr(self, key)
         new._validate()
@@ -250,6 +258,15 @@ class Polyhedron:
         tail, _, face, start = self._ring
         mean = np.add.reduceat(self.vertices[tail], start, axis=0) / np.diff(np.append(start, len(tail)))[:, None]
         return np.einsum("ij,ij->i", self.normals, mean)
+
+    @cached_property
+    def face_flatness(self) -> np.ndarray:
+        """(m,) float: largest distance of each face's vertices from the face's plane (model units)."""
+        tail, _, face, _ = self._ring
+        dist = np.abs(np.einsum("ij,ij->i", self.vertices[tail], self.normals[face]) - self.offsets[face])
+        out = np.zeros(len(self.faces))
+        np.maximum.at(out, face, dist)
+        return out
 
     @cached_property
     def face_centroids(self) -> np.ndarray:
@@ -327,14 +344,16 @@ class Polyhedron:
         lengths = np.linalg.norm(self.vertices[head] - self.vertices[tail], axis=1)
         if np.any(lengths <= tol.LENGTH * scale):
             raise GeometryError("an edge has zero length")
-        dist = np.abs(np.einsum("ij,ij->i", self.vertices[tail], self.normals[face]) - self.offsets[face])
-        if dist.max() > tol.PLANARITY * scale:
-            k = int(face[np.argmax(dist)])
-            raise GeometryError(f"face {self.names[k]} is not planar (off by {dist.max():.3g})")
+        flat = self.face_flatness
+        planarity = tol.PLANARITY * scale if self.flatness is None else max(float(self.flatness), tol.PLANARITY * scale)
+        if flat.max() > planarity:
+            k = int(np.argmax(flat))
+            raise GeometryError(f"face {self.names[k]} is not planar (off by {flat[k]:.3g})")
         if self.volume <= tol.VOLUME * scale**3:
             raise GeometryError("volume is not positive: the solid is flat or its faces are oriented inward")
         height = self.vertices @ self.normals.T - self.offsets
-        if height.max() > tol.CONVEXITY * scale:
+        convexity = tol.CONVEXITY * scale if self.flatness is None else max(planarity, tol.CONVEXITY * scale)
+        if height.max() > convexity:
             v, k = np.unravel_index(np.argmax(height), height.shape)
             raise GeometryError(f"not convex: vertex {v} lies {height[v, k]:.3g} outside face {self.names[k]}")
 
@@ -356,15 +375,17 @@ def _merge_coplanar(points: np.ndarray, simplices: np.ndarray, equations: np.nda
     """Group hull triangles by plane and return each group's boundary polygon, outward CCW."""
     normals = equations[:, :3]
     groups: list[list[int]] = []
+    refs = np.empty_like(equations)  # each group's first triangle's plane, compared with all at once
     for t in range(len(simplices)):
-        for g in groups:
-            ref = equations[g[0]]
-            if 1 - normals[t] @ ref[:3] < tol.COPLANAR and abs(equations[t, 3] - ref[3]) < tol.COPLANAR * (
-                1 + abs(ref[3])
-            ):
-                g.append(t)
-                break
+        r = refs[: len(groups)]
+        same = (1 - r[:, :3] @ normals[t] < tol.COPLANAR) & (
+            np.abs(equations[t, 3] - r[:, 3]) < tol.COPLANAR * (1 + np.abs(r[:, 3]))
+        )
+        hit = np.flatnonzero(same)
+        if hit.size:
+            groups[hit[0]].append(t)
         else:
+            refs[len(groups)] = equations[t]
             groups.append([t])
     faces = []
     for g in groups:

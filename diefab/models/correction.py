@@ -21,6 +21,14 @@ geometry and the centre of mass alone, so faces that a symmetry of the die
 maps onto each other get equal features and equal probabilities (a Platonic
 solid stays uniform), and the model is deterministic.
 
+The correction is learned from dice that rest on every face of their hull,
+and it holds only there: its **domain** is a die with no transitional face
+whose resting faces' standardized features lie within the training faces'
+range, widened by :data:`DOMAIN_PAD` standard deviations.  Outside it (a
+real printed die with transitional faces, a figurine's hull) the
+correction extrapolates, and :meth:`Correction.__call__` returns the chain
+alone, with the same constants (:meth:`Correction.covers`).
+
 ``g`` is linear in the standardized features (``expansion="linear"``; the
 first six of them, ``"small"``), or in them and their pairwise products
 (``"quadratic"``), or in them and Gaussian kernels centred on training
@@ -84,6 +92,8 @@ FEATURES = (
 )
 #: Floor of a probability under a logarithm.
 _FLOOR = 1e-4
+#: How far (standard deviations per feature) beyond the training faces' range the correction still applies.
+DOMAIN_PAD = 1.0
 
 
 def face_features(
@@ -236,6 +246,9 @@ class Correction:
         Kernel centres of an ``"rbf"`` correction (standardized features of training faces).
     width : float
         Their width, in standard deviations per feature.
+    low, high : (k,) float, optional
+        The training faces' range of standardized features (the domain,
+        see :meth:`covers`); None: no range is checked.
     """
 
     expansion: str
@@ -247,6 +260,8 @@ class Correction:
     info: dict = field(default_factory=dict)
     centers: np.ndarray | None = None
     width: float = 1.0
+    low: np.ndarray | None = None
+    high: np.ndarray | None = None
 
     @classmethod
     def fit(
@@ -304,7 +319,24 @@ class Correction:
         options = {"maxiter": 10_000, "ftol": 1e-15, "gtol": 1e-10}
         res = minimize(loss, np.zeros(a.shape[1]), jac=True, method="L-BFGS-B", options=options)
         return cls(expansion, mean, scale, res.x, float(penalty), dict(chain or {}), dict(info or {}), centers,
-                   float(width))  # fmt: skip
+                   float(width), z.min(axis=0), z.max(axis=0))  # fmt: skip
+
+    def covers(self, features: np.ndarray, resting: np.ndarray) -> bool:
+        """Whether a die is in the correction's domain: no transitional face, features within the training range.
+
+        Parameters
+        ----------
+        features : (m, k) float
+            :func:`face_features` of every face of the die.
+        resting : (m,) bool
+            The faces it can rest on.
+        """
+        if not resting.all():
+            return False
+        if self.low is None or self.high is None:
+            return True
+        z = (features - self.mean) / self.scale
+        return bool(np.all(z >= self.low - DOMAIN_PAD) and np.all(z <= self.high + DOMAIN_PAD))
 
     def logits(self, features: np.ndarray) -> np.ndarray:
         """(m,) float: the logit correction of each row of base features."""
@@ -328,12 +360,17 @@ class Correction:
         `chain`, if given, must be the chain's probabilities with :attr:`chain`'s
         constants; `inertia` is the body's tensor about its centre of mass over
         its mass, which the chain takes (the features take the uniform solid's).
+        A die outside the correction's domain (:meth:`covers`) gets the chain
+        alone, normalized over its resting faces.
         """
         from diefab.models.chain import landing_probabilities
 
         if chain is None:
             chain = landing_probabilities(poly, center, inertia=inertia, **self.chain)
         features, resting = face_features(poly, center, chain)
+        if not self.covers(features, resting):
+            out = np.where(resting, chain, 0.0)
+            return out / out.sum() if out.sum() > 0 else out
         return self.correct(chain, features, resting)
 
     def to_json(self) -> str:
@@ -349,6 +386,8 @@ class Correction:
         }
         if self.centers is not None:
             data |= {"width": self.width, "centers": np.round(self.centers, 5).tolist()}
+        if self.low is not None and self.high is not None:
+            data["domain"] = {"low": self.low.tolist(), "high": self.high.tolist()}
         return json.dumps(data, indent=1) + "\n"
 
     @classmethod
@@ -358,8 +397,10 @@ class Correction:
             raise DesignError(f"the correction's features {data.get('features')} are not this version's {FEATURES}")
         arrays = (np.array(data[k], dtype=float) for k in ("mean", "scale", "weights"))
         centers = np.array(data["centers"], dtype=float) if "centers" in data else None
+        domain = data.get("domain", {})
+        low, high = (np.array(domain[k], dtype=float) if k in domain else None for k in ("low", "high"))
         return cls(data["expansion"], *arrays, float(data["penalty"]), data.get("chain", {}), data.get("info", {}),
-                   centers, float(data.get("width", 1.0)))  # fmt: skip
+                   centers, float(data.get("width", 1.0)), low, high)  # fmt: skip
 
 
 @cache

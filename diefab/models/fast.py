@@ -56,7 +56,9 @@ it misses is learned from simulations, one of two ways (:func:`fast_model`):
 5. **the general correction** (:mod:`diefab.models.correction`), for every other
    convex die: a per-face logit correction, a function of features every
    polyhedron has (margins, barriers, areas, the chain's own shares ...),
-   fitted to random dice of every family.
+   fitted to random dice of every family, and applied only to dice like
+   those (every hull face a resting face, features within the training
+   range); any other die gets the chain alone.
 
 A gem made of card or printed (a ``fill``) gets one more learned layer,
 its fill's :class:`FillCorrection`: what the model with the body's centre
@@ -120,7 +122,10 @@ def fast_model(poly: Polyhedron, center: np.ndarray, *, fill: Fill | None = None
     inertia lies from the solid's (a body with the solid's inertia gets
     the solid's prediction).  Every other die gets the per-face logit correction
     learned from random dice of every family
-    (:func:`diefab.models.correction.corrected`).  A gem is recognized by
+    (:func:`diefab.models.correction.corrected`) when it lies in that correction's
+    domain (no transitional face, features within the training range), and
+    the chain alone otherwise: real printed dice with transitional faces
+    are predicted better by the chain than by the correction extrapolated.  A gem is recognized by
     :func:`~diefab.dice.families.gem_parameters`: built by the gem family, not the
     same shape given as a ``convex`` or ``mesh`` design, which gets the
     general correction.

@@ -1,7 +1,10 @@
 """Physical roll counts of real dice, turned into diefab designs.
 
 The files (one JSON object per die, Baktash et al. 2025; see the data's
-README) hold the die's convex hull in millimetres, the centre of mass and
+README) hold the die's convex hull in ``geometry.units`` (millimetres,
+centimetres, metres, inches, or ``model`` units with ``geometry.size_mm``
+the real length of the bounding box's longest side; read as millimetres
+when absent), the centre of mass and
 inertia of the printed body (for a figurine die, off the hull's centroid),
 the outcome each hull face counts for, the counts of real rolls and the
 source's own predictions.  :func:`load_real_rolls` reads one;
@@ -39,6 +42,9 @@ __all__ = ["RealRolls", "grouped_tvd", "load_real_rolls"]
 
 #: Hull triangles within this distance of one plane become one face (mm).
 MERGE_TOLERANCE_MM = 0.05
+
+#: Millimetres per unit of ``geometry.units`` (``model`` units take ``geometry.size_mm`` instead).
+UNITS_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4}
 
 
 @dataclass(frozen=True, eq=False)
@@ -213,7 +219,7 @@ def _count(where: str, value) -> None:
 
 def _fields() -> dict:
     """Top-level key of a real-rolls file -> the check of its value (:mod:`diefab.dice.schema`'s checks)."""
-    from diefab.dice.schema import array, index, integer, point, record, table, text, word
+    from diefab.dice.schema import array, index, integer, point, positive, record, table, text, word
 
     prediction = array(_finite, least=1)
     return {
@@ -221,7 +227,8 @@ def _fields() -> dict:
         "description": text,
         "physical": record(outcomes=array(integer, least=1), counts=array(_count, least=1)),
         "their_model_and_sims": record(ours=prediction, bullet=prediction, ipc=prediction),
-        "geometry": record(hull_vertices=array(point, least=4), hull_faces=array(array(index, length=3), least=4)),
+        "geometry": record(hull_vertices=array(point, least=4), hull_faces=array(array(index, length=3), least=4),
+                           units=word, size_mm=positive),
         "fabricated_body": record(volume=_finite, com=point,
                                   inertia_about_com_unit_density=array(array(_finite, length=3), length=3)),
         "outcome_faces": table(array(index)),
@@ -267,6 +274,14 @@ def _check_data(data) -> None:
     for i, tri in enumerate(geo["hull_faces"]):
         if max(tri) >= n_vertices:
             raise DesignError(f"geometry.hull_faces[{i}] = {tri} names a vertex beyond the {n_vertices} hull_vertices")
+    units = geo.get("units", "mm")
+    if units not in (*UNITS_MM, "model"):
+        raise DesignError(f"geometry.units = {units!r} is not one of {', '.join((*UNITS_MM, 'model'))}")
+    if units == "model" and "size_mm" not in geo:
+        raise DesignError("geometry.units = 'model' needs geometry.size_mm, the real length (mm) of the longest "
+                          "side of the hull's bounding box")  # fmt: skip
+    if units != "model" and "size_mm" in geo:
+        raise DesignError(f"geometry.size_mm is for model units; geometry.units = {units!r} already gives the size")
     if data["fabricated_body"]["volume"] <= 0:
         raise DesignError(f"fabricated_body.volume = {data['fabricated_body']['volume']!r} is not a positive number")
     for key in ("outcome_faces", "outcome_stable_faces"):
@@ -288,13 +303,17 @@ def _check_data(data) -> None:
 def load_real_rolls(path: str | Path) -> RealRolls:
     """Read one die of the real-rolls data (a JSON file).
 
+    The geometry and the body (``fabricated_body``, in the hull's
+    coordinates and units) are converted from ``geometry.units`` to
+    millimetres.
+
     Raises
     ------
     DesignError
         The file is not a regular file, not UTF-8 JSON, or a field has the
         wrong type, is missing or disagrees with another (counts for every
-        outcome, triangles of the hull, outcomes that exist); the message
-        names the file and the field.
+        outcome, triangles of the hull, outcomes that exist, a unit diefab
+        knows); the message names the file and the field.
     """
     path = Path(path)
     if not path.is_file():
@@ -308,6 +327,9 @@ def load_real_rolls(path: str | Path) -> RealRolls:
     except DesignError as exc:
         raise DesignError(f"real rolls {path}: {exc}") from None
     phys, geo, body = data["physical"], data["geometry"], data["fabricated_body"]
+    vertices = np.array(geo["hull_vertices"], dtype=float)
+    units = geo.get("units", "mm")
+    mm = UNITS_MM[units] if units != "model" else float(geo["size_mm"]) / float(np.ptp(vertices, axis=0).max())
     reference = {}
     for key in ("ours", "bullet", "ipc"):
         if key in data.get("their_model_and_sims", {}):
@@ -319,11 +341,11 @@ def load_real_rolls(path: str | Path) -> RealRolls:
         counts=np.array(phys["counts"], dtype=np.int64),
         groups=tuple(tuple(g) for g in data.get("ambiguous_groups", [])),
         reference=reference,
-        hull_vertices=np.array(geo["hull_vertices"], dtype=float),
+        hull_vertices=vertices * mm,
         hull_faces=np.array(geo["hull_faces"], dtype=np.intp),
         outcome_faces={int(k): list(v) for k, v in data["outcome_faces"].items()},
         outcome_stable_faces={int(k): list(v) for k, v in data["outcome_stable_faces"].items()},
-        center_of_mass=np.array(body["com"], dtype=float),
-        inertia=np.array(body["inertia_about_com_unit_density"], dtype=float) / float(body["volume"]),
+        center_of_mass=np.array(body["com"], dtype=float) * mm,
+        inertia=np.array(body["inertia_about_com_unit_density"], dtype=float) / float(body["volume"]) * mm**2,
         description=str(data.get("description", "")),
     )

@@ -1,0 +1,72 @@
+"""Published real rolls of objects of known geometry, read into real dice.
+
+The package ships tables of physical roll counts from the literature
+(``diefab/data/published/*.json``), each with its citation, the object, the
+outcome counted and the throw and surface where stated.  They are held-out
+dice: nothing in diefab was fitted to them.
+
+``square-cuboids``: 15 homogeneous steel cuboids with two square faces
+(``y x y``) and four rectangles (``x x y``), ``x / y`` from 0.47 to 2.65,
+each rolled 275-1011 times by hand; the count is of a square face up
+(:func:`square_cuboid_dice`).
+
+Examples
+--------
+>>> dice = square_cuboid_dice()
+>>> len(dice), dice[0].design.support, int(dice[0].counts[1]), dice[0].n
+(15, [0, 1], 304, 332)
+"""
+
+from __future__ import annotations
+
+import json
+from importlib import resources
+
+import numpy as np
+
+from diefab.search.calibrate import RealDie
+
+__all__ = ["PUBLISHED", "published_source", "square_cuboid", "square_cuboid_dice"]
+
+#: The shipped tables, by name.
+PUBLISHED = ("square-cuboids",)
+
+
+def _table(name: str) -> dict:
+    return json.loads(resources.files("diefab").joinpath("data", "published", f"{name}.json").read_text())
+
+
+def published_source(name: str) -> str:
+    """The citation of the shipped table `name`."""
+    return _table(name)["source"]
+
+
+def square_cuboid(ratio: float, name: str | None = None, size_mm: float = 20.0):
+    """A homogeneous cuboid ``x x y x y`` with ``x / y = ratio`` (x along z), value 1 on the two square faces.
+
+    Model units: its longest side is 2; `size_mm` is that side's real length
+    (the published tables do not give it: the rigid model is scale-free).
+    """
+    from diefab.dice.design import Design
+
+    y = 2.0 / max(1.0, ratio)
+    half = np.array([y, y, ratio * y]) / 2
+    vertices = [[sx * half[0], sy * half[1], sz * half[2]] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]
+    faces = ((0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3))
+    normals_z = [0, 0, 0, 0, -1, 1]  # which faces are square (normal along z): f5 (z-) and f6 (z+)
+    values = {f"f{k + 1}": int(abs(nz) == 1) for k, nz in enumerate(normals_z)}
+    return Design(name or f"cuboid-{ratio:g}", "convex", vertices=tuple(map(tuple, vertices)), faces=faces,
+                  values=values, target="0:2,1:1", size_mm=size_mm,
+                  description=f"square cuboid x/y = {ratio:g}, value 1 on the square faces")  # fmt: skip
+
+
+def square_cuboid_dice() -> list[RealDie]:
+    """The 15 steel square cuboids of the ``square-cuboids`` table, counts of (rectangle up, square up)."""
+    data = _table("square-cuboids")
+    dice = []
+    for row in data["table"]:
+        n, p = int(row["rolls"]), float(row["p_square"])
+        (square,) = [c for c in range(n + 1) if round(c / n, 3) == p]  # the one count the published p allows
+        design = square_cuboid(float(row["x_over_y"]), name=f"cuboid-{row['x_over_y']:.2f}")
+        dice.append(RealDie(design.name, design, np.array([n - square, square])))
+    return dice

@@ -1,0 +1,43 @@
+"""Published real rolls: the square cuboids' table reads into dice of the stated geometry and counts."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from diefab.search.published import published_source, square_cuboid, square_cuboid_dice
+
+
+def test_every_published_row_gives_a_die_with_its_rolls_and_its_fraction():
+    dice = square_cuboid_dice()
+    assert len(dice) == 15
+    for d in dice:
+        ratio = float(d.name.split("-")[1])
+        assert d.design.support == [0, 1]
+        assert round(d.counts[1] / d.n, 3) == pytest.approx(_published(ratio))
+    assert sum(d.n for d in dice) == 9329  # the table's N column
+
+
+def _published(ratio: float) -> float:
+    import json
+    from importlib import resources
+
+    table = json.loads(resources.files("diefab").joinpath("data", "published", "square-cuboids.json").read_text())
+    (row,) = [r for r in table["table"] if abs(r["x_over_y"] - ratio) < 1e-9]
+    return row["p_square"]
+
+
+@pytest.mark.parametrize("ratio", [0.47, 1.0, 2.65])
+def test_square_cuboid_geometry(ratio):
+    d = square_cuboid(ratio)
+    poly = d.polyhedron
+    extent = np.ptp(poly.vertices, axis=0)
+    assert extent.max() == pytest.approx(2.0)
+    assert extent[2] / extent[0] == pytest.approx(ratio) and extent[0] == pytest.approx(extent[1])
+    square = [k for k, n in enumerate(poly.names) if d.values[n] == 1]
+    assert len(square) == 2 and np.allclose(np.abs(poly.normals[square, 2]), 1)
+    assert poly.volume == pytest.approx(np.prod(extent))
+
+
+def test_the_table_names_its_source():
+    assert "Mathematical Gazette" in published_source("square-cuboids")

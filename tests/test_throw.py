@@ -1,0 +1,33 @@
+"""The one-parameter throw spans the source's gentle release and the paper's vigorous drop."""
+
+from __future__ import annotations
+
+import pytest
+
+from diefab.core.errors import PhysicsError
+from diefab.physics.simulate import PhysicsSettings
+from diefab.physics.throw import GENTLE, VIGOROUS, throw_settings
+
+
+def test_vigor_one_is_the_default_throw_and_zero_the_gentle_release():
+    assert throw_settings(1.0) == PhysicsSettings()
+    gentle = throw_settings(0)
+    assert (gentle.restitution, gentle.friction, gentle.drop_height) == (0.0, 0.1, GENTLE["drop_height"])
+    assert gentle.angular_velocity == (0.0, 0.0) and gentle.height_jitter == 0.0
+
+
+def test_every_setting_moves_linearly_and_the_rest_of_the_base_is_kept():
+    base = PhysicsSettings(rolling_friction=0.01, capture_energy=0.2)
+    half = throw_settings(0.5, base)
+    assert half.friction == pytest.approx((GENTLE["friction"] + VIGOROUS["friction"]) / 2)
+    assert half.drop_height == pytest.approx((GENTLE["drop_height"] + VIGOROUS["drop_height"]) / 2)
+    assert half.angular_velocity[1] == pytest.approx(VIGOROUS["spin"] / 2)
+    assert (half.rolling_friction, half.capture_energy) == (0.01, 0.2)
+    heights = [throw_settings(v).drop_height for v in (0, 0.25, 0.5, 0.75, 1)]
+    assert heights == sorted(heights)
+
+
+@pytest.mark.parametrize("bad", [-0.1, 1.5, float("nan"), "1", True, None])
+def test_vigor_outside_zero_one_is_refused(bad):
+    with pytest.raises(PhysicsError, match="vigor"):
+        throw_settings(bad)
