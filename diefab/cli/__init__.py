@@ -23,6 +23,7 @@ from .optimize import optimize
 from .predict import predict, templates
 from .stats import stats
 from .stl import stl
+from .studio import studio
 from .validate import validate
 
 __all__ = ["cli", "main"]
@@ -34,7 +35,7 @@ def cli() -> None:
     """Design, simulate and fabricate dice with unequal face probabilities."""
 
 
-for _command in (templates, predict, stats, design, optimize, validate, calibrate, net, stl):
+for _command in (templates, predict, stats, design, optimize, validate, calibrate, net, stl, studio):
     cli.add_command(_command)
 
 

@@ -1,0 +1,53 @@
+"""``diefab studio``: serve the local web studio."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from .common import out_option
+
+
+@click.command()
+@click.argument("spec", metavar="[DESIGN|TARGET]", required=False, default=None)
+@click.option("--port", type=click.IntRange(1, 65535), default=8080, show_default=True, help="Port to serve on.")
+@click.option("--host", default="127.0.0.1", show_default=True,
+              help="Address to bind; another lets other machines use the studio and its --out.")  # fmt: skip
+@click.option("--no-browser", is_flag=True, help="Only serve; do not open a browser.")
+@out_option
+def studio(spec, port, host, no_browser, out_dir) -> None:
+    """Design, see and make a die in a local web page.
+
+    DESIGN (a template name or a design file) opens that die; a TARGET
+    (2d6, 3dF, 1:3,2:3 ...) opens the default die with the target filled in
+    for "Design for target".  Files are read and written only in --out and
+    the shipped templates.
+    """
+    from ..design import load_design
+    from ..errors import DiefabError
+    from ..files import ensure_dir
+
+    target = None
+    if spec is None:
+        design = load_design("fudge-gem")
+    else:
+        try:
+            design = load_design(spec)
+        except DiefabError as design_error:
+            from ..targets import parse_target
+
+            try:
+                parse_target(spec)
+            except DiefabError:
+                raise design_error from None
+            target, design = spec, load_design("fudge-gem")
+    _ = design.polyhedron  # a bad design fails here, before serving
+    ensure_dir(out_dir)
+    if host not in ("127.0.0.1", "localhost", "::1"):
+        click.echo(f"diefab: warning: serving on {host}: other machines can open the studio and write into "
+                   f"{Path(out_dir).resolve()}", err=True)  # fmt: skip
+    from ..studio.app import serve
+
+    click.echo(f"diefab studio: http://{host}:{port}/  (files in {out_dir}; Ctrl-C stops)", err=True)
+    serve(design, out_dir, host=host, port=port, show=not no_browser, target=target)
