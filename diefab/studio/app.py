@@ -10,6 +10,7 @@ from __future__ import annotations
 import asyncio
 import json
 import math
+import time
 from dataclasses import replace
 from functools import lru_cache
 from pathlib import Path
@@ -28,6 +29,9 @@ MAX_UPLOAD = 256 * 1024
 #: Color of a transitional face (the die rolls off it) and of a highlighted face.
 TRANSITIONAL = "#9e9e9e"
 HIGHLIGHT = "#1e88e5"
+
+#: Background of the printed value labels (a label stays the same image whatever the face's color).
+LABEL = "#fbf8ef"
 
 #: Thickness of the plates the faces are drawn as, model units.
 PLATE = 0.004
@@ -59,8 +63,8 @@ NET_JS = """
 
 
 @lru_cache(maxsize=512)
-def _label_url(text: str, background: str) -> str:
-    return label_image(text, background)
+def _label_url(text: str) -> str:
+    return label_image(text, LABEL)
 
 
 def _fmt_seconds(s: float | None) -> str:
@@ -86,6 +90,7 @@ class Studio:
         self.jobs: dict[str, Job] = {}
         self.profile: str | None = None
         self._net_generation = -1
+        self._edit_started: float | None = None
         self._building = False
 
     # ----------------------------------------------------------------- layout
@@ -230,6 +235,7 @@ class Studio:
 
     # ------------------------------------------------------------------ edits
     def edit(self, key: tuple, rebuild: bool = False, **changes) -> None:
+        self._edit_started = time.perf_counter()
         try:
             self.session.edit(key=key, **changes)
         except DiefabError as exc:
@@ -327,7 +333,10 @@ class Studio:
             while True:
                 gen, design = self.generation, self.session.design
                 try:
-                    ev = await run.io_bound(self.session.evaluation, design)
+                    if design.fill.kind == "solid":  # milliseconds: a thread hop would cost more than it saves
+                        ev = self.session.evaluation(design)
+                    else:  # a paper or print body takes seconds: keep the page responsive meanwhile
+                        ev = await run.io_bound(self.session.evaluation, design)
                 except DiefabError as exc:
                     if gen == self.generation:
                         self.show_error(str(exc))
@@ -363,10 +372,13 @@ class Studio:
         self.draw_die(design, ev)
         self.undo_button.set_enabled(bool(self.session.undo_stack))
         self.redo_button.set_enabled(bool(self.session.redo_stack))
+        started, self._edit_started = self._edit_started, None
         self.state_box.set_text(
             json.dumps(
                 {
                     **ev,
+                    # from the edit's arrival to the page's update being queued, ms (None: not from an edit)
+                    "server_ms": None if started is None else 1000 * (time.perf_counter() - started),
                     "undo": len(self.session.undo_stack),
                     "redo": len(self.session.redo_stack),
                     "generation": self.generation,
@@ -412,7 +424,7 @@ class Studio:
             for k, name in enumerate(poly.names):
                 text = ev["labels"].get(name) or ("↻" if ev["faces"][k]["transitional"] else "")
                 if text:
-                    self.scene.texture(_label_url(text, colors[name]), label_quad(poly, k, 0.002)).with_name(name)
+                    self.scene.texture(_label_url(text), label_quad(poly, k, 0.002)).with_name(name)
         r = float(abs(poly.vertices).max())
         if not getattr(self, "_camera_set", False):
             self.scene.move_camera(x=0.9 * r, y=-2.4 * r, z=1.7 * r, look_at_x=0, look_at_y=0, look_at_z=0,

@@ -137,7 +137,7 @@ class Session:
         if fill is not None or fill_settings:
             new = replace(new, fill=replace(new.fill, kind=fill or new.fill.kind, **(fill_settings or {})))
         _ = new.polyhedron  # builds and checks the geometry now, not in the page
-        if new != d:
+        if _key(new) != _key(d):
             if not (key and key == self._last_key and self.undo_stack and not self.redo_stack):
                 self.undo_stack.append(d)
                 del self.undo_stack[:-HISTORY]
@@ -147,7 +147,9 @@ class Session:
         return new
 
     def replace_design(self, design: Design) -> None:
-        """Open another design (undoable)."""
+        """Open another design (undoable; opening the same design again changes nothing)."""
+        if _key(design) == _key(self.design):
+            return
         self.undo_stack.append(self.design)
         del self.undo_stack[:-HISTORY]
         self.redo_stack.clear()
