@@ -126,9 +126,10 @@ def _bars(pg) -> list[str]:
     return pg.eval_on_selector_all(".studio-chart svg path", "els => els.map(e => e.getAttribute('d'))")
 
 
-def _shot(pg, name: str) -> None:
+def _shot(pg, name: str, full: bool = False) -> None:
     SHOTS.mkdir(parents=True, exist_ok=True)
-    pg.screenshot(path=str(SHOTS / f"studio-{name}.png"), full_page=False)
+    pg.wait_for_timeout(1500)  # the 3D die follows the chart by a moment
+    pg.screenshot(path=str(SHOTS / f"studio-{name}.png"), full_page=full)
 
 
 def test_page_works_offline(page):
@@ -147,7 +148,7 @@ def test_template_slider_chart_margins_undo(page):
     assert len(before["probabilities"]) == 9 and abs(sum(before["probabilities"]) - 1) < 1e-9
     _shot(page, "main")
 
-    page.locator(".studio-param-a [tabindex=\"0\"]").first.focus()
+    page.locator('.studio-param-a [tabindex="0"]').first.focus()
     page.evaluate("""() => {
         window.__lat = [];
         const chart = document.querySelector('.studio-chart');
@@ -168,7 +169,6 @@ def test_template_slider_chart_margins_undo(page):
     print(f"slider-to-chart latency, ms: median {np.median(latencies):.1f}, max {max(latencies):.1f}, "
           f"n {len(latencies)}; of it in the server: median {np.nanmedian(server_ms):.1f}; "
           f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")  # fmt: skip
-    (SHOTS.parent / "img").mkdir(parents=True, exist_ok=True)
     # the chart and the margins follow the slider, and agree with the library's fast model at the new parameters
     assert _bars(page) != bars_before
     expected = value_probabilities(load_design("fudge-gem").with_params(**after["params"]), "fast")
@@ -202,7 +202,7 @@ def test_net_linked_to_die(page):
     assert n == len(_state(page)["faces"])
     page.locator(".studio-net .net-face").first.hover()
     page.wait_for_timeout(500)
-    _shot(page, "net")
+    _shot(page, "net", full=True)
 
 
 def test_validate_runs_drops_with_progress(page):
@@ -215,7 +215,7 @@ def test_validate_runs_drops_with_progress(page):
     m = re.search(r"(\d+) of (\d+) drops on a face, (\d+) cocked, (\d+) unsettled", verdict)
     assert m and int(m.group(2)) == 60 and int(m.group(1)) + int(m.group(3)) + int(m.group(4)) == 60
     assert page.locator(".studio-validate-bar").count() == 1
-    _shot(page, "validate")
+    _shot(page, "validate", full=True)
 
 
 def test_downloads_are_sound(page, server, tmp_path):
@@ -247,8 +247,10 @@ def test_downloads_are_sound(page, server, tmp_path):
     # engraved labels remove a little material: between 0.5 % and 8 % of the uncut die
     assert 0.92 * volume < mesh.volume < 0.995 * volume
     # and the files were written in --out only
-    assert {p.name for p in server["out"].iterdir() if not p.name.startswith(".")} >= {"fudge-gem-net.svg",
-                                                                                      "fudge-gem.stl"}
+    assert {p.name for p in server["out"].iterdir() if not p.name.startswith(".")} >= {
+        "fudge-gem-net.svg",
+        "fudge-gem.stl",
+    }
 
 
 def test_bad_upload_is_one_message_and_server_lives(page, server, tmp_path):
@@ -280,7 +282,7 @@ def test_design_job_cancels_and_closing_the_page_stops_jobs(browser, server):
     pg.locator(".studio-cancel").click()
     pg.wait_for_function("() => /cancelled/.test(document.querySelector('.studio-design-text').textContent)",
                          timeout=20_000)  # fmt: skip
-    _shot(pg, "design")
+    _shot(pg, "design", full=True)
     # a validation left running stops when its page closes
     pg.get_by_role("tab", name="Validate").click()
     pg.get_by_label("drops").fill("200000")

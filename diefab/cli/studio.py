@@ -47,6 +47,10 @@ def studio(spec, port, host, no_browser, out_dir) -> None:
     if host not in ("127.0.0.1", "localhost", "::1"):
         click.echo(f"diefab: warning: serving on {host}: other machines can open the studio and write into "
                    f"{Path(out_dir).resolve()}", err=True)  # fmt: skip
+    try:
+        import nicegui  # noqa: F401
+    except ImportError:
+        raise click.ClickException("the studio needs NiceGUI: pip install 'diefab[studio]'") from None
     from ..studio.app import serve
 
     click.echo(f"diefab studio: http://{host}:{port}/  (files in {out_dir}; Ctrl-C stops)", err=True)

@@ -149,6 +149,7 @@ class Studio:
         ui.timer(0.25, self.poll_jobs)
         self.rebuild_controls()
         asyncio.get_event_loop().create_task(self.refresh())
+        asyncio.get_event_loop().create_task(self._place_camera())
 
     def _build_make(self) -> None:
         from nicegui import ui
@@ -369,7 +370,8 @@ class Studio:
             for f in ev["faces"]
         ]  # fmt: skip
         self.margins.update()
-        self.draw_die(design, ev)
+        # the chart and numbers go out first; the 3D die follows in the next batch (skipped if already stale)
+        asyncio.get_event_loop().create_task(self._draw_die_soon(design, ev, self.generation))
         self.undo_button.set_enabled(bool(self.session.undo_stack))
         self.redo_button.set_enabled(bool(self.session.redo_stack))
         started, self._edit_started = self._edit_started, None
@@ -408,6 +410,17 @@ class Studio:
         colors = face_colors(probs, top)
         return {f["name"]: (TRANSITIONAL if f["transitional"] else c) for f, c in zip(ev["faces"], colors)}
 
+    async def _place_camera(self) -> None:
+        """Look at the die from above a girdle corner once the browser's scene exists."""
+        await self.scene.initialized()
+        r = float(abs(self.session.design.polyhedron.vertices).max())
+        self.scene.move_camera(x=1.5 * r, y=1.2 * r, z=1.1 * r, look_at_x=0, look_at_y=0, look_at_z=0, duration=0)
+
+    async def _draw_die_soon(self, design: Design, ev: dict, generation: int) -> None:
+        await asyncio.sleep(0.02)
+        if generation == self.generation:
+            self.draw_die(design, ev)
+
     def draw_die(self, design: Design, ev: dict) -> None:
         poly = design.polyhedron
         colors = self._colors(ev)
@@ -425,11 +438,6 @@ class Studio:
                 text = ev["labels"].get(name) or ("↻" if ev["faces"][k]["transitional"] else "")
                 if text:
                     self.scene.texture(_label_url(text), label_quad(poly, k, 0.002)).with_name(name)
-        r = float(abs(poly.vertices).max())
-        if not getattr(self, "_camera_set", False):
-            self.scene.move_camera(x=0.9 * r, y=-2.4 * r, z=1.7 * r, look_at_x=0, look_at_y=0, look_at_z=0,
-                                   duration=0)  # fmt: skip
-            self._camera_set = True
         top = max((f["probability"] for f in ev["faces"]), default=0.0)
         stops = ", ".join(f"rgb{c} {100 * t:.0f}%" for t, c in SCALE)
         self.legend.set_content(
