@@ -64,18 +64,19 @@ def server(tmp_path_factory):
     port = _free_port()
     # NiceGUI takes a PYTEST_* variable for its own test harness: the studio runs as a user would run it
     env = {k: v for k, v in os.environ.items() if not k.startswith("PYTEST")} | {"PYTHONPATH": str(ROOT)}
+    log = open(out.parent / "studio.log", "wb")  # a file, not a pipe: a full pipe would stall the server
     proc = subprocess.Popen([sys.executable, "-m", "diefab", "studio", "fudge-gem", "--no-browser", "--port",
-                             str(port), "--out", str(out)], cwd=ROOT, env=env, stdout=subprocess.PIPE,
+                             str(port), "--out", str(out)], cwd=ROOT, env=env, stdout=log,
                             stderr=subprocess.STDOUT)  # fmt: skip
     url = f"http://127.0.0.1:{port}"
     try:
         for _ in range(240):
             try:
-                urllib.request.urlopen(url + "/healthz", timeout=1)
+                urllib.request.urlopen(url + "/healthz", timeout=1).close()
                 break
             except OSError:
                 if proc.poll() is not None:
-                    pytest.fail(f"the studio did not start: {proc.stdout.read().decode()}")
+                    pytest.fail(f"the studio did not start: {(out.parent / 'studio.log').read_text()}")
                 time.sleep(0.25)
         yield {"url": url, "out": out, "proc": proc}
     finally:
@@ -85,6 +86,7 @@ def server(tmp_path_factory):
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait(5)
+        log.close()
 
 
 @pytest.fixture(scope="module")
@@ -122,6 +124,13 @@ def _wait_state(pg, cond, timeout=60.0) -> dict:
     raise AssertionError(f"the page's state never met the condition; last: {str(_state(pg))[:300]}")
 
 
+def _wait_text(pg, selector: str, pattern: str, timeout_s: float) -> str:
+    """Wait until the text of `selector` matches the regular expression `pattern`; the text."""
+    pg.wait_for_function("([sel, pat]) => new RegExp(pat).test(document.querySelector(sel).textContent)",
+                         arg=[selector, pattern], timeout=timeout_s * 1000)  # fmt: skip
+    return pg.locator(selector).text_content()
+
+
 def _bars(pg) -> list[str]:
     return pg.eval_on_selector_all(".studio-chart svg path", "els => els.map(e => e.getAttribute('d'))")
 
@@ -155,7 +164,10 @@ def test_template_slider_chart_margins_undo(page):
         const slider = document.querySelector('.studio-param-a');
         slider.addEventListener('keydown', () => { window.__t0 = performance.now(); window.__t1 = null; }, true);
         new MutationObserver(() => {
-            if (window.__t0 && !window.__t1) { window.__t1 = performance.now(); window.__lat.push(window.__t1 - window.__t0); }
+            if (window.__t0 && !window.__t1) {
+                window.__t1 = performance.now();
+                window.__lat.push(window.__t1 - window.__t0);
+            }
         }).observe(chart, {subtree: true, childList: true, attributes: true});
     }""")  # fmt: skip
     server_ms = []
@@ -187,10 +199,7 @@ def test_template_slider_chart_margins_undo(page):
 def test_click_face_shows_its_numbers(page):
     box = page.locator(".studio-scene canvas").first.bounding_box()
     page.mouse.click(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
-    text = page.locator(".studio-face").text_content()
-    page.wait_for_function("() => /face f\\d+/.test(document.querySelector('.studio-face').textContent)",
-                           timeout=10_000)  # fmt: skip
-    text = page.locator(".studio-face").text_content()
+    text = _wait_text(page, ".studio-face", r"face f\d+", 10)
     name = re.search(r"face (f\d+)", text).group(1)
     face = next(f for f in _state(page)["faces"] if f["name"] == name)
     assert f"{face['probability']:.4f}" in text and f"{face['margin']:.4f}" in text
@@ -209,8 +218,7 @@ def test_validate_runs_drops_with_progress(page):
     page.get_by_role("tab", name="Validate").click()
     page.get_by_label("drops").fill("60")
     page.locator(".studio-validate").click()
-    page.wait_for_function("() => /p = /.test(document.querySelector('.studio-verdict').textContent)",
-                           timeout=240_000)  # fmt: skip
+    _wait_text(page, ".studio-verdict", r"p = ", 240)
     verdict = page.locator(".studio-verdict").text_content()
     m = re.search(r"(\d+) of (\d+) drops on a face, (\d+) cocked, (\d+) unsettled", verdict)
     assert m and int(m.group(2)) == 60 and int(m.group(1)) + int(m.group(3)) + int(m.group(4)) == 60
@@ -266,7 +274,8 @@ def test_bad_upload_is_one_message_and_server_lives(page, server, tmp_path):
     page.wait_for_function("() => document.querySelector('.studio-error').textContent !== " + json.dumps(message),
                            timeout=20_000)  # fmt: skip
     assert "Traceback" not in page.locator(".studio-error").text_content()
-    assert urllib.request.urlopen(server["url"] + "/healthz", timeout=5).status == 200
+    with urllib.request.urlopen(server["url"] + "/healthz", timeout=5) as reply:
+        assert reply.status == 200
 
 
 def test_design_job_cancels_and_closing_the_page_stops_jobs(browser, server):
@@ -276,19 +285,16 @@ def test_design_job_cancels_and_closing_the_page_stops_jobs(browser, server):
     pg.get_by_role("tab", name="Design for target").click()
     pg.get_by_label("target").fill("1:1,2:2,3:3")
     pg.locator(".studio-design").click()
-    pg.wait_for_function("() => /budget/.test(document.querySelector('.studio-design-text').textContent)",
-                         timeout=60_000)  # fmt: skip
+    _wait_text(pg, ".studio-design-text", r"budget", 60)
     assert _children(server["proc"].pid)
     pg.locator(".studio-cancel").click()
-    pg.wait_for_function("() => /cancelled/.test(document.querySelector('.studio-design-text').textContent)",
-                         timeout=20_000)  # fmt: skip
+    _wait_text(pg, ".studio-design-text", r"cancelled", 20)
     _shot(pg, "design", full=True)
     # a validation left running stops when its page closes
     pg.get_by_role("tab", name="Validate").click()
     pg.get_by_label("drops").fill("200000")
     pg.locator(".studio-validate").click()
-    pg.wait_for_function("() => /drops/.test(document.querySelector('.studio-validate-text').textContent)",
-                         timeout=60_000)  # fmt: skip
+    _wait_text(pg, ".studio-validate-text", r"drops", 60)
     assert _children(server["proc"].pid)
     pg.close()
     end = time.monotonic() + 30

@@ -611,36 +611,35 @@ class Studio:
                 job.cancel()
 
     def poll_jobs(self) -> None:
-        job = self.jobs.get("validate")
-        if job is not None and not getattr(job, "shown", False):
+        """Show what the running jobs reported, and their results once they end."""
+        panels = (("validate", self.validate_bar, self.validate_text, self.show_validation),
+                  ("design", self.design_bar, self.design_text, self.show_designed))  # fmt: skip
+        for kind, bar, text, show in panels:
+            job = self.jobs.get(kind)
+            if job is None or getattr(job, "shown", False):
+                continue
             ended = job.poll()
-            self.validate_bar.set_value(job.fraction)
-            if job.total:
-                self.validate_text.set_text(f"{int(job.done)} of {int(job.total)} drops, ETA "
-                                            f"{_fmt_seconds(job.eta_seconds)}")  # fmt: skip
-            if ended:
-                job.shown = True
-                self.show_validation(job)
-        job = self.jobs.get("design")
-        if job is not None and not getattr(job, "shown", False):
-            ended = job.poll()
-            for line in job.notes[getattr(job, "logged", 0) :]:
-                self.design_log.push(line)
-            job.logged = len(job.notes)
-            self.design_bar.set_value(job.fraction)
-            if job.total:
-                self.design_text.set_text(f"{job.done:.0f} of {job.total:.0f} s budget, ETA at most "
-                                          f"{_fmt_seconds(job.total - job.done)}")  # fmt: skip
-            if ended:
-                job.shown = True
-                self.show_designed(job)
-
-    def show_validation(self, job: Job) -> None:
-        if job.error:
-            self.validate_text.set_text(job.error)
+            bar.set_value(job.fraction)
+            if kind == "design":
+                for line in job.notes[getattr(job, "logged", 0) :]:
+                    self.design_log.push(line)
+                job.logged = len(job.notes)
+                if job.total:
+                    text.set_text(f"{job.done:.0f} of {job.total:.0f} s budget, ETA at most "
+                                  f"{_fmt_seconds(job.total - job.done)}")  # fmt: skip
+            elif job.total:
+                text.set_text(f"{int(job.done)} of {int(job.total)} drops, ETA {_fmt_seconds(job.eta_seconds)}")
+            if not ended:
+                continue
+            job.shown = True
+            if job.error is None:
+                show(job)
+                continue
+            text.set_text(job.error)
             if job.error != "cancelled":
                 self.show_error(job.error)
-            return
+
+    def show_validation(self, job: Job) -> None:
         r = job.result
         ok = r["p_value"] >= 0.05
         self.verdict.set_text(
@@ -676,11 +675,6 @@ class Studio:
         self.last_validation = r
 
     def show_designed(self, job: Job) -> None:
-        if job.error:
-            self.design_text.set_text(job.error)
-            if job.error != "cancelled":
-                self.show_error(job.error)
-            return
         try:
             design = parse_design(job.result, source="designed die")
         except DiefabError as exc:

@@ -157,18 +157,18 @@ class Session:
         self._last_key = ()
 
     def undo(self) -> bool:
-        if not self.undo_stack:
-            return False
-        self.redo_stack.append(self.design)
-        self.design = self.undo_stack.pop()
-        self._last_key = ()
-        return True
+        """Go back one edit; False when there is none."""
+        return self._step(self.undo_stack, self.redo_stack)
 
     def redo(self) -> bool:
-        if not self.redo_stack:
+        """Redo the edit last undone; False when there is none."""
+        return self._step(self.redo_stack, self.undo_stack)
+
+    def _step(self, source: list[Design], sink: list[Design]) -> bool:
+        if not source:
             return False
-        self.undo_stack.append(self.design)
-        self.design = self.redo_stack.pop()
+        sink.append(self.design)
+        self.design = source.pop()
         self._last_key = ()
         return True
 
