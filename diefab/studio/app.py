@@ -157,18 +157,20 @@ class Studio:
         with ui.row().classes("w-full no-wrap items-start gap-6"):
             with ui.column().classes("w-80"):
                 ui.label("Paper net").classes("font-bold")
-                self.page_size = ui.select(["A5", "A4", "A3", "Letter", "Legal"], value="A4", label="page")
-                self.copies = ui.number("copies", value=1, min=1, max=100, step=1, precision=0)
-                self.mark = ui.select(["bar", "period", "none"], value="bar", label="6/9 mark")
-                self.net_format = ui.select(["svg", "pdf"], value="svg", label="format")
+                self.page_size = ui.select(["A5", "A4", "A3", "Letter", "Legal"], value="A4", label="page").classes(
+                    "w-40"
+                )
+                self.copies = ui.number("copies", value=1, min=1, max=100, step=1, precision=0).classes("w-40")
+                self.mark = ui.select(["bar", "period", "none"], value="bar", label="6/9 mark").classes("w-40")
+                self.net_format = ui.select(["svg", "pdf"], value="svg", label="format").classes("w-40")
                 ui.button("download net", on_click=self.download_net).classes("studio-download-net")
                 ui.separator()
                 ui.label("Printable solid").classes("font-bold")
-                self.round_mm = ui.number("edge rounding, mm", value=0.0, min=0, max=5, step=0.1)
-                self.depth_mm = ui.number("label depth, mm", value=0.6, min=0.2, max=2, step=0.1)
+                self.round_mm = ui.number("edge rounding, mm", value=0.0, min=0, max=5, step=0.1).classes("w-40")
+                self.depth_mm = ui.number("label depth, mm", value=0.6, min=0.2, max=2, step=0.1).classes("w-40")
                 self.emboss = ui.checkbox("emboss (raise) the labels")
                 self.inlay = ui.checkbox("also the inlay (labels alone)")
-                self.solid_format = ui.select(["stl", "3mf"], value="stl", label="format")
+                self.solid_format = ui.select(["stl", "3mf"], value="stl", label="format").classes("w-40")
                 ui.button("download solid", on_click=self.download_solid).classes("studio-download-stl")
                 self.make_note = ui.label().classes("studio-make-note text-sm")
             with ui.column().classes("grow"):
