@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from .common import out_option
+from diefab.cli.common import out_option
 
 
 @click.command()
@@ -24,9 +24,9 @@ def studio(spec, port, host, no_browser, out_dir) -> None:
     for "Design for target".  Files are read and written only in --out and
     the shipped templates.
     """
-    from ..design import load_design
-    from ..errors import DiefabError
-    from ..files import ensure_dir
+    from diefab.core.errors import DiefabError
+    from diefab.core.files import ensure_dir
+    from diefab.dice.design import load_design
 
     target = None
     if spec is None:
@@ -35,7 +35,7 @@ def studio(spec, port, host, no_browser, out_dir) -> None:
         try:
             design = load_design(spec)
         except DiefabError as design_error:
-            from ..targets import parse_target
+            from diefab.dice.targets import parse_target
 
             try:
                 parse_target(spec)
@@ -51,7 +51,7 @@ def studio(spec, port, host, no_browser, out_dir) -> None:
         import nicegui  # noqa: F401
     except ImportError:
         raise click.ClickException("the studio needs NiceGUI: pip install 'diefab[studio]'") from None
-    from ..studio.app import serve
+    from diefab.studio.app import serve
 
     click.echo(f"diefab studio: http://{host}:{port}/  (files in {out_dir}; Ctrl-C stops)", err=True)
     serve(design, out_dir, host=host, port=port, show=not no_browser, target=target)

@@ -6,6 +6,6 @@ work, :mod:`.make` the files written, :mod:`.app` the page itself (NiceGUI,
 imported only when the studio is served).
 """
 
-from .state import Session, evaluate, face_colors, parameters
+from diefab.studio.state import Session, evaluate, face_colors, parameters
 
 __all__ = ["Session", "evaluate", "face_colors", "parameters"]

@@ -16,12 +16,12 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-from ..design import Design, list_templates, load_design, parse_design
-from ..errors import DesignError, DiefabError
-from .jobs import Job, design_job, validate_job
-from .make import net_faces, write_design, write_net, write_solid
-from .state import FILLS, SCALE, Session, face_colors, parameters
-from .view import face_frames, label_image, label_quad, net_svg
+from diefab.core.errors import DesignError, DiefabError
+from diefab.dice.design import Design, list_templates, load_design, parse_design
+from diefab.studio.jobs import Job, design_job, validate_job
+from diefab.studio.make import net_faces, write_design, write_net, write_solid
+from diefab.studio.state import FILLS, SCALE, Session, face_colors, parameters
+from diefab.studio.view import face_frames, label_image, label_quad, net_svg
 
 #: Largest design file accepted by upload, bytes (a design is a few kilobytes).
 MAX_UPLOAD = 256 * 1024
@@ -183,7 +183,7 @@ class Studio:
         with ui.row().classes("items-end gap-4"):
             self.sims = ui.number("drops", value=2000, min=10, max=1_000_000, step=100, precision=0)
             self.seed = ui.number("seed", value=0, min=0, step=1, precision=0)
-            from ..profiles import list_profiles
+            from diefab.physics.profiles import list_profiles
 
             self.profile_select = ui.select(["design's own", *list_profiles()], value="design's own",
                                             label="physics profile").classes("w-48")  # fmt: skip
@@ -576,7 +576,7 @@ class Studio:
         self.validate_text.set_text("starting a worker ...")
 
     def start_design(self) -> None:
-        from ..targets import parse_target
+        from diefab.dice.targets import parse_target
 
         if self._running("design"):
             return

@@ -15,7 +15,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from ..errors import DiefabError
+from diefab.core.errors import DiefabError
 
 
 class Job:
@@ -119,10 +119,10 @@ def validate_job(design, sims: int, seed: int, profile: str | None, *, report) -
     """Drop `design` `sims` times and test the counts against its target (as ``diefab validate``)."""
     import numpy as np
 
-    from ..errors import PhysicsError
-    from ..physics import PhysicsSettings, simulate
-    from ..profiles import load_profile
-    from ..stats import goodness_of_fit
+    from diefab.core.errors import PhysicsError
+    from diefab.physics.profiles import load_profile
+    from diefab.physics.simulate import PhysicsSettings, simulate
+    from diefab.stats.goodness import goodness_of_fit
 
     settings = (load_profile(profile, base=design.physics) if profile
                 else PhysicsSettings.from_mapping(design.physics))  # fmt: skip
@@ -153,9 +153,9 @@ def validate_job(design, sims: int, seed: int, profile: str | None, *, report) -
 
 def design_job(target: str, fill, model: str, budget_seconds: float, seed: int, name: str, *, report) -> str:
     """Design a die for `target` (as ``diefab design``, without its closing check); the design as TOML."""
-    from ..design import design_to_toml
-    from ..synthesis import synthesize
-    from ..targets import parse_target
+    from diefab.dice.design import design_to_toml
+    from diefab.dice.targets import parse_target
+    from diefab.search.synthesis import synthesize
 
     start = time.monotonic()
     report("progress", 0.0, budget_seconds)

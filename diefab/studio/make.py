@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..design import Design, design_to_toml
-from ..errors import FabricationError, OutputError
+from diefab.core.errors import FabricationError, OutputError
+from diefab.dice.design import Design, design_to_toml
 
 
 def _inside(out_dir: Path, path: Path) -> Path:
@@ -21,9 +21,9 @@ def write_net(design: Design, out_dir: Path, *, page: str = "A4", formats: tuple
               copies: int = 1, mark: str = "bar", pips: bool = False, face_names: bool = False,
               tab_width: float = 5.0) -> list[Path]:  # fmt: skip
     """Write the paper net of `design` (as ``diefab net``); the files written."""
-    from ..fabricate.net import design_net, render_net
-    from ..fabricate.pages import parse_page
-    from ..files import ensure_dir, output_path, write_files
+    from diefab.core.files import ensure_dir, output_path, write_files
+    from diefab.fabricate.net import design_net, render_net
+    from diefab.made.pages import parse_page
 
     ensure_dir(out_dir)
     net = design_net(design, page=parse_page(page), tab_width=tab_width)
@@ -43,9 +43,9 @@ def write_solid(
     inlay: bool = False,
 ) -> tuple[list[Path], dict]:
     """Write the printable solid of `design` (as ``diefab stl``); the files written and the solid's report."""
-    from ..fabricate.formats import inlay_stl_bytes, stl_bytes, threemf_bytes
-    from ..fabricate.stl import build_solid
-    from ..files import ensure_dir, output_path, write_files
+    from diefab.core.files import ensure_dir, output_path, write_files
+    from diefab.fabricate.formats import inlay_stl_bytes, stl_bytes, threemf_bytes
+    from diefab.fabricate.stl import build_solid
 
     bad = [f for f in formats if f not in ("stl", "3mf")]
     if bad or not formats:
@@ -65,7 +65,7 @@ def write_solid(
 
 def write_design(design: Design, out_dir: Path) -> Path:
     """Write `design` as a TOML design file into `out_dir`."""
-    from ..files import ensure_dir, output_path, write_files
+    from diefab.core.files import ensure_dir, output_path, write_files
 
     ensure_dir(out_dir)
     path = _inside(out_dir, output_path(out_dir, design.name, ".toml"))
@@ -74,9 +74,9 @@ def write_design(design: Design, out_dir: Path) -> Path:
 
 def net_faces(design: Design, page: str = "A4"):
     """The laid-out net of `design` for the page's picture: (faces side by side, mm), face names."""
-    from ..fabricate.net import design_net
-    from ..fabricate.pages import parse_page
-    from .view import side_by_side
+    from diefab.fabricate.net import design_net
+    from diefab.made.pages import parse_page
+    from diefab.studio.view import side_by_side
 
     net = design_net(design, page=parse_page(page))
     return side_by_side(net.faces, net.face_page, net.page.width), list(net.poly.names)

@@ -12,9 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from ..design import Design, format_value
-from ..errors import DesignError, DiefabError
-from ..families import family
+from diefab.core.errors import DesignError, DiefabError
+from diefab.dice.design import Design, format_value
+from diefab.dice.families import family
 
 #: Fill kinds the studio offers (``shell`` is the CLI's thin-skin solid; the studio keeps to what makers build).
 FILLS = ("solid", "paper", "print")
@@ -50,8 +50,8 @@ def evaluate(design: Design, model: str = "fast") -> dict[str, Any]:
         ``design.support``; ``stable`` and ``message`` (why not);
         ``min_margin`` over the resting faces.
     """
-    from ..models import face_probabilities, to_values
-    from ..stats import tvd
+    from diefab.models.probabilities import face_probabilities, to_values
+    from diefab.stats.goodness import tvd
 
     poly = design.polyhedron
     fill = design.fill

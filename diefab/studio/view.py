@@ -6,7 +6,7 @@ from html import escape
 
 import numpy as np
 
-from ..geometry import Polyhedron
+from diefab.geometry.polyhedron import Polyhedron
 
 
 def face_frames(poly: Polyhedron) -> list[dict]:
