@@ -47,6 +47,7 @@ def studio(spec, port, host, no_browser, out_dir) -> None:
     if host not in ("127.0.0.1", "localhost", "::1"):
         click.echo(f"diefab: warning: serving on {host}: other machines can open the studio and write into "
                    f"{Path(out_dir).resolve()}", err=True)  # fmt: skip
+    _check_port(host, port)
     try:
         import nicegui  # noqa: F401
     except ImportError:
@@ -55,3 +56,21 @@ def studio(spec, port, host, no_browser, out_dir) -> None:
 
     click.echo(f"diefab studio: http://{host}:{port}/  (files in {out_dir}; Ctrl-C stops)", err=True)
     serve(design, out_dir, host=host, port=port, show=not no_browser, target=target)
+
+
+def _check_port(host: str, port: int) -> None:
+    """Refuse a port another program holds, with one line instead of the server's log."""
+    import socket
+
+    try:
+        infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)
+    except OSError as exc:
+        raise click.BadParameter(f"{host}: {exc.strerror or exc}", param_hint="--host") from None
+    family, _, _, _, address = infos[0]
+    with socket.socket(family, socket.SOCK_STREAM) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            probe.bind(address)
+        except OSError as exc:
+            raise click.BadParameter(f"cannot serve on {host}:{port}: {exc.strerror or exc}",
+                                     param_hint="--port") from None  # fmt: skip
