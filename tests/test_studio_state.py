@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from diefab import load_design, value_probabilities
-from diefab import DesignError
+from diefab import DesignError, load_design, value_probabilities
 from diefab.studio.state import Session, evaluate, face_colors, parameters
 from diefab.studio.view import face_frames, label_quad, net_svg
 
