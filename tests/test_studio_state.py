@@ -113,3 +113,14 @@ def _sleep_forever(*, report):
 
     while True:
         time.sleep(1)
+
+
+def test_studio_command_refuses_bad_input_in_one_line(bad, tmp_path):
+    import socket
+
+    assert "unknown template" in bad("studio", "no-such-die", "--no-browser", "--out", tmp_path)
+    with socket.socket() as held:
+        held.bind(("127.0.0.1", 0))
+        held.listen()
+        port = held.getsockname()[1]
+        assert "cannot serve on 127.0.0.1" in bad("studio", "d6", "--no-browser", "--port", port, "--out", tmp_path)
