@@ -289,6 +289,13 @@ def test_design_job_cancels_and_closing_the_page_stops_jobs(browser, server):
     assert _children(server["proc"].pid)
     pg.locator(".studio-cancel").click()
     _wait_text(pg, ".studio-design-text", r"cancelled", 20)
+    # a target a fair die carries exactly is designed at once, and opens in the page
+    pg.get_by_label("target").fill("1:1,2:1,3:1")
+    pg.locator(".studio-design").click()
+    _wait_text(pg, ".studio-design-text", r"designed", 120)
+    designed = _wait_state(pg, lambda s: s["name"].startswith("die-"))
+    np.testing.assert_allclose(designed["target"], [1 / 3] * 3)
+    np.testing.assert_allclose(designed["probabilities"], designed["target"], atol=1e-6)
     _shot(pg, "design", full=True)
     # a validation left running stops when its page closes
     pg.get_by_role("tab", name="Validate").click()

@@ -201,7 +201,7 @@ class Studio:
 
         with ui.row().classes("items-end gap-4"):
             self.target_input = ui.input("target", value=self.start_target or "2d6").classes("w-56")
-            self.model_select = ui.select(["fast", "solid-angle", "simulation"], value="fast", label="model")
+            self.model_select = ui.select(["fast", "solid-angle", "simulation"], value="fast", label="model").classes("w-40")
             self.budget = ui.number("budget, s", value=60, min=5, max=3600, step=5, precision=0)
             ui.button("Design for target", on_click=self.start_design).classes("studio-design")
             ui.button("cancel", on_click=lambda: self.cancel("design")).props("flat").classes("studio-cancel")
