@@ -201,7 +201,8 @@ class Studio:
 
         with ui.row().classes("items-end gap-4"):
             self.target_input = ui.input("target", value=self.start_target or "2d6").classes("w-56")
-            self.model_select = ui.select(["fast", "solid-angle", "simulation"], value="fast", label="model").classes("w-40")
+            models = ["fast", "solid-angle", "simulation"]
+            self.model_select = ui.select(models, value="fast", label="model").classes("w-40")
             self.budget = ui.number("budget, s", value=60, min=5, max=3600, step=5, precision=0)
             ui.button("Design for target", on_click=self.start_design).classes("studio-design")
             ui.button("cancel", on_click=lambda: self.cancel("design")).props("flat").classes("studio-cancel")
@@ -526,41 +527,36 @@ class Studio:
 
     # ------------------------------------------------------------- downloads
     async def download_net(self) -> None:
-        from nicegui import run, ui
-
-        try:
-            self.make_note.set_text("making the net ...")
-            paths = await run.io_bound(write_net, self.session.design, self.out_dir, page=self.page_size.value,
-                                       formats=(self.net_format.value,), copies=int(self.copies.value or 1),
-                                       mark=self.mark.value)  # fmt: skip
-        except DiefabError as exc:
-            self.make_note.set_text("")
-            self.show_error(str(exc))
-            return
-        for p in paths:
-            ui.download.file(p)
-        self.make_note.set_text("wrote " + ", ".join(str(p) for p in paths))
+        await self._make("net", write_net, page=self.page_size.value, formats=(self.net_format.value,),
+                         copies=int(self.copies.value or 1), mark=self.mark.value)  # fmt: skip
 
     async def download_solid(self) -> None:
+        await self._make("solid", write_solid, formats=(self.solid_format.value,),
+                         round_mm=float(self.round_mm.value or 0), depth_mm=float(self.depth_mm.value or 0.6),
+                         emboss=bool(self.emboss.value), inlay=bool(self.inlay.value))  # fmt: skip
+
+    async def _make(self, what: str, writer, **options) -> None:
+        """Run a writer of :mod:`diefab.studio.make` in a thread and download what it wrote."""
         from nicegui import run, ui
 
+        self.make_note.set_text(f"making the {what} ...")
         try:
-            self.make_note.set_text("making the solid ...")
-            paths, report = await run.io_bound(
-                write_solid, self.session.design, self.out_dir, formats=(self.solid_format.value,),
-                round_mm=float(self.round_mm.value or 0), depth_mm=float(self.depth_mm.value or 0.6),
-                emboss=bool(self.emboss.value), inlay=bool(self.inlay.value))  # fmt: skip
+            written = await run.io_bound(writer, self.session.design, self.out_dir, **options)
         except DiefabError as exc:
-            self.make_note.set_text("")
-            self.show_error(str(exc))
+            message = str(exc)
+        except Exception as exc:  # a bug: one line, the server keeps running
+            message = f"internal error: {type(exc).__name__}: {exc}"
+        else:
+            paths, report = written if isinstance(written, tuple) else (written, {})
+            for path in paths:
+                ui.download.file(path)
+            note = "wrote " + ", ".join(str(p) for p in paths)
+            if report:
+                note += f"; volume {report['volume_mm3']:.1f} mm³, watertight {report['watertight']}"
+            self.make_note.set_text(note)
             return
-        for p in paths:
-            ui.download.file(p)
-        self.make_note.set_text(
-            "wrote "
-            + ", ".join(str(p) for p in paths)
-            + f"; volume {report['volume_mm3']:.1f} mm³, watertight {report['watertight']}"
-        )
+        self.make_note.set_text("")
+        self.show_error(message)
 
     # ------------------------------------------------------------------ jobs
     def start_validate(self) -> None:
