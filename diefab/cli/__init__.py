@@ -22,6 +22,7 @@ from diefab.cli.optimize import optimize
 from diefab.cli.predict import predict, templates
 from diefab.cli.stats import stats
 from diefab.cli.stl import stl
+from diefab.cli.studio import studio
 from diefab.cli.validate import validate
 from diefab.core.errors import DiefabError
 
@@ -34,7 +35,7 @@ def cli() -> None:
     """Design, simulate and fabricate dice with unequal face probabilities."""
 
 
-for _command in (templates, predict, stats, design, optimize, validate, calibrate, net, stl):
+for _command in (templates, predict, stats, design, optimize, validate, calibrate, net, stl, studio):
     cli.add_command(_command)
 
 

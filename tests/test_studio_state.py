@@ -1,0 +1,126 @@
+"""The studio's state and geometry without a browser: evaluation, undo/redo, colors, face frames, jobs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from diefab import DesignError, load_design, value_probabilities
+from diefab.studio.state import Session, evaluate, face_colors, parameters
+from diefab.studio.view import face_frames, label_quad, net_svg
+
+
+def test_evaluation_is_the_library_fast_model():
+    d = load_design("fudge-gem")
+    ev = evaluate(d)
+    np.testing.assert_allclose(ev["probabilities"], value_probabilities(d, "fast"), atol=1e-12)
+    assert sum(f["probability"] for f in ev["faces"]) == pytest.approx(1.0)
+    np.testing.assert_allclose([f["margin"] for f in ev["faces"]], d.margins())
+    assert ev["stable"] and ev["min_margin"] > 0
+    # every resting face is read from the face its design says
+    assert {f["name"]: f["read_from"] for f in ev["faces"]} == d.label_face
+
+
+def test_a_cube_is_uniform():
+    ev = evaluate(load_design("d6"))
+    np.testing.assert_allclose(ev["probabilities"], np.full(6, 1 / 6), atol=1e-9)
+
+
+def test_parameters_within_family_bounds():
+    for p in parameters(load_design("fudge-gem")):
+        assert p["lower"] <= p["value"] <= p["upper"]
+
+
+def test_one_slider_drag_is_one_undo_step():
+    s = Session(load_design("fudge-gem"))
+    a0 = s.design.params["a"]
+    for a in (1.2, 1.21, 1.22):
+        s.edit(key=("param", "a"), params={"a": a})
+    s.edit(key=("param", "b"), params={"b": 0.55})
+    assert len(s.undo_stack) == 2
+    assert s.undo() and s.design.params["b"] != 0.55 and s.design.params["a"] == 1.22
+    assert s.undo() and s.design.params["a"] == a0
+    assert not s.undo()
+    assert s.redo() and s.redo() and s.design.params["b"] == 0.55
+    assert not s.redo()
+
+
+def test_bad_edit_changes_nothing():
+    s = Session(load_design("fudge-gem"))
+    with pytest.raises(DesignError):
+        s.edit(key=("param", "a"), params={"a": 99.0})
+    assert s.design.params["a"] == 1.18 and not s.undo_stack
+
+
+def test_evaluations_are_cached():
+    s = Session(load_design("fudge-gem"))
+    assert s.evaluation() is s.evaluation()
+
+
+def test_colors_darken_with_probability():
+    colors = face_colors(np.array([0.0, 0.1, 0.2]))
+    lum = [sum(int(c[i : i + 2], 16) for i in (1, 3, 5)) for c in colors]
+    assert lum[0] > lum[1] > lum[2]
+
+
+def test_face_frames_place_every_vertex():
+    poly = load_design("fudge-gem").polyhedron
+    for k, frame in enumerate(face_frames(poly)):
+        rot = np.array(frame["rotation"])
+        np.testing.assert_allclose(rot.T @ rot, np.eye(3), atol=1e-12)
+        assert np.linalg.det(rot) == pytest.approx(1.0)
+        xy = np.array(frame["outline"])
+        placed = frame["center"] + np.column_stack([xy, np.zeros(len(xy))]) @ rot.T
+        np.testing.assert_allclose(placed, poly.vertices[np.asarray(poly.faces[k])], atol=1e-12)
+        quad = np.array(label_quad(poly, k, 0.0)).reshape(4, 3)
+        # the label lies in the face's plane, inside the face
+        np.testing.assert_allclose(quad @ poly.normals[k], poly.offsets[k], atol=1e-12)
+        assert np.all(poly.normals @ quad.T <= poly.offsets[:, None] + 1e-12)
+
+
+def test_net_svg_has_one_polygon_per_face():
+    import xml.etree.ElementTree as ET
+
+    faces = [np.array([[0, 0], [10, 0], [0, 10]], float), np.array([[10, 0], [10, 10], [0, 10]], float)]
+    root = ET.fromstring(net_svg(faces, ["f1", "f2"], {"f1": "6"}, ["#fff", "#000"]))
+    groups = root.findall("{http://www.w3.org/2000/svg}g")
+    assert [g.get("data-face") for g in groups] == ["f1", "f2"]
+
+
+def test_job_reports_and_cancels():
+    from diefab.studio.jobs import Job
+
+    job = Job(_count_to, 3)
+    import time
+
+    end = time.monotonic() + 60
+    while not job.poll() and time.monotonic() < end:
+        time.sleep(0.05)
+    assert job.result == 3 and job.done == 3 and job.error is None
+    slow = Job(_sleep_forever)
+    slow.cancel()
+    assert slow.error == "cancelled" and not slow.process.is_alive()
+
+
+def _count_to(n, *, report):
+    for i in range(n + 1):
+        report("progress", i, n)
+    return n
+
+
+def _sleep_forever(*, report):
+    import time
+
+    while True:
+        time.sleep(1)
+
+
+def test_studio_command_refuses_bad_input_in_one_line(bad, tmp_path):
+    import socket
+
+    assert "unknown template" in bad("studio", "no-such-die", "--no-browser", "--out", tmp_path)
+    with socket.socket() as held:
+        held.bind(("127.0.0.1", 0))
+        held.listen()
+        port = held.getsockname()[1]
+        assert "cannot serve on 127.0.0.1" in bad("studio", "d6", "--no-browser", "--port", port, "--out", tmp_path)
