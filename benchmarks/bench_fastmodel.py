@@ -55,6 +55,7 @@ import numpy as np
 from diefab.core.files import atomic_write
 from diefab.dice.design import load_design
 from diefab.geometry.polyhedron import face_margins
+from diefab.models import discrepancy, fills
 from diefab.stats.goodness import jsd, pearson_divergence, tvd
 
 RESULTS = Path(__file__).with_name("results") / "fastmodel.json"
@@ -231,7 +232,7 @@ class TrainingSet:
 
         With `distances`, also each design's distance to the nearest design of the other folds.
         """
-        from diefab.models.fast import Discrepancy
+        from diefab.models.discrepancy import Discrepancy
 
         n = len(self.designs) if n is None else n
         folds = np.random.default_rng(0).permutation(n) % FOLDS
@@ -246,7 +247,7 @@ class TrainingSet:
         return (err, near) if distances else err
 
     def learn(self, **kw):
-        from diefab.models.fast import Discrepancy
+        from diefab.models.discrepancy import Discrepancy
 
         return Discrepancy.learn(self.points, self.margins, self.p, self.q, **kw)
 
@@ -260,7 +261,6 @@ def learn(training: TrainingSet, drops: int, seed: int, design_seed: int = TRAIN
     A fill's correction is learned by ``learn_fill_correction.py``.
     """
     from diefab.models import chain
-    from diefab.models import fast as fastmodel
     from diefab.physics.simulate import PhysicsSettings
 
     scores = {}
@@ -284,10 +284,10 @@ def learn(training: TrainingSet, drops: int, seed: int, design_seed: int = TRAIN
         "chain": {k: getattr(chain, k.upper()) for k in names},
         "cv": {f"{k:g}": {"median_tvd": round(v[0], 5), "mean_tvd": round(v[1], 5)} for k, v in scores.items()},
     }
-    name = fastmodel.DISCREPANCY_FILE
+    name = discrepancy.DISCREPANCY_FILE
     fit = training.learn(smoothing=best, info=info)
     atomic_write(DISCREPANCY / name, fit.to_json())
-    fastmodel.gem_discrepancy.cache_clear()
+    discrepancy.gem_discrepancy.cache_clear()
     score = scores[best]
     out = {"file": name, "smoothing": best}
     return out | {"cv_median_tvd": score[0], "cv_mean_tvd": score[1], "median_tvd_without": float(np.median(before))}
@@ -295,9 +295,8 @@ def learn(training: TrainingSet, drops: int, seed: int, design_seed: int = TRAIN
 
 def ablation(training: TrainingSet, test, test_q) -> None:
     """Cross-validated TVD by coordinates and training-set size; the test set with the parameters alone."""
-    from diefab.models import fast as fastmodel
 
-    smoothing = fastmodel.gem_discrepancy().smoothing
+    smoothing = discrepancy.gem_discrepancy().smoothing
     print(f"\nablation ({FOLDS}-fold CV on the training set at its drops, noise included; smoothing {smoothing:g})")
     print(f"{'coordinates':<28} {'designs':>7} {'median':>7} {'mean':>7}")
     for physics, label in ((False, "parameters"), (True, "parameters + margins, chain")):
@@ -382,7 +381,6 @@ def main(argv=None) -> None:
         return
 
     from diefab.models import chain
-    from diefab.models import fast as fastmodel
     from diefab.models.probabilities import MODELS
 
     constants = {}
@@ -407,8 +405,8 @@ def main(argv=None) -> None:
     def no_layer(poly, center, *, fill=None, inertia=None):
         from diefab.dice.families import gem_parameters
 
-        at = fastmodel.fill_discrepancy(args.fill).discrepancy_at
-        return fastmodel.made_gem_base(poly, center, inertia, gem_parameters(poly), face_margins(poly, center), at)
+        at = fills.fill_discrepancy(args.fill).discrepancy_at
+        return fills.made_gem_base(poly, center, inertia, gem_parameters(poly), face_margins(poly, center), at)
 
     # with new chain constants the packaged discrepancy (learned against the old chain) does not apply
     models = {"fast": MODELS["fast"], "chain": chain, "solid": MODELS["solid-angle"]}
@@ -416,7 +414,7 @@ def main(argv=None) -> None:
         models |= {"no-layer": no_layer, "fast-solid": solid_trained}
     if args.calibrate:
         del models["fast"]
-    found = fastmodel.gem_discrepancy()
+    found = discrepancy.gem_discrepancy()
     rows, near = [], []
     margins = []
     for d, r, q in zip(test, test_runs, frequencies(test_runs)):
@@ -458,7 +456,7 @@ def main(argv=None) -> None:
             print(f"gem discrepancy: smoothing {found.smoothing:g}, {FOLDS}-fold CV on the training set: "
                   f"median TVD {cv['median_tvd']:.4f}, mean {cv['mean_tvd']:.4f} "
                   f"(at {info['drops']} drops, noise included)")  # fmt: skip
-        layer = fastmodel.fill_discrepancy(args.fill)
+        layer = fills.fill_discrepancy(args.fill)
         if layer is not None:
             li = layer.info
             chosen = f"{layer.discrepancy_at} {layer.coordinates} {layer.penalty:g}"

@@ -13,7 +13,7 @@ already simulated in that fill at its current default settings under that
 set name (for example the shell gems of ``bench_fastmodel.py --fill shell
 --test-seed 404``).
 
-It then learns :class:`diefab.models.fast.FillCorrection` from them: the
+It then learns :class:`diefab.models.fills.FillCorrection` from them: the
 simulated frequencies minus the fast model without the fill's layer, as a
 ridge-regularized linear function of the coordinates plus, where it helps, a
 Gaussian kernel ridge term, proportional to the body's inertia excess.  The
@@ -74,6 +74,7 @@ from bench_fastmodel import (  # noqa: E402
     simulated,
 )
 
+from diefab.models import fills  # noqa: E402
 from diefab.stats.goodness import tvd  # noqa: E402
 
 #: Ridge penalties the cross-validation chooses from (per training gem, on standardized coordinates).
@@ -102,7 +103,7 @@ class FillData:
 
     def __init__(self, kind: str, designs: list, runs: list[dict]):
         from diefab.geometry.polyhedron import face_margins
-        from diefab.models.fast import DISCREPANCY_AT, body_excess, made_gem_base
+        from diefab.models.fills import DISCREPANCY_AT, body_excess, made_gem_base
 
         self.kind, self.designs, self.runs = kind, designs, runs
         self.points = np.array([[d.params[n] for n in "abcde"] for d in designs])
@@ -121,7 +122,7 @@ class FillData:
         self.margins, self.excess = np.array(margins), np.array(excess)
 
     def learn(self, discrepancy_at: str = "body", **kw):
-        from diefab.models.fast import FillCorrection
+        from diefab.models.fills import FillCorrection
 
         base = self.base[discrepancy_at]
         return FillCorrection.learn(self.kind, self.points, self.margins, base, self.excess, self.q,
@@ -129,7 +130,7 @@ class FillData:
 
     def cross_validate(self, discrepancy_at: str = "body", **kw) -> np.ndarray:
         """(n,) held-out TVD of every gem, 5-fold (fixed folds), each fold learned from the others with `kw`."""
-        from diefab.models.fast import FillCorrection
+        from diefab.models.fills import FillCorrection
 
         n = len(self.designs)
         base = self.base[discrepancy_at]
@@ -193,7 +194,7 @@ def choose(data: FillData) -> tuple[dict, dict]:
     mean held-out TVD wins, and within 1 % of it the simpler choice (simpler
     coordinates, larger penalties, no kernel term).
     """
-    from diefab.models.fast import DISCREPANCY_AT, FILL_COORDINATES
+    from diefab.models.fills import DISCREPANCY_AT, FILL_COORDINATES
 
     def score(label: str, **kw) -> tuple[float, float]:
         err = data.cross_validate(**kw)
@@ -239,11 +240,10 @@ def label(choice: dict) -> str:
 def main(argv=None) -> None:
     from diefab.core.files import atomic_write
     from diefab.made.fill import Fill
-    from diefab.models import fast as fastmodel
     from diefab.physics.simulate import PhysicsSettings
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--fill", choices=fastmodel.FILL_LAYERS, required=True)
+    ap.add_argument("--fill", choices=fills.FILL_LAYERS, required=True)
     ap.add_argument("--seed", type=int, default=606, help="design seed of the training gems")
     ap.add_argument("--designs", type=int, default=120, help="training gems to draw and simulate")
     ap.add_argument("--drops", type=int, default=1000, help="drops per training gem")
@@ -315,7 +315,7 @@ def main(argv=None) -> None:
         "cv": {k: {"median_tvd": round(v[0], 5), "mean_tvd": round(v[1], 5)} for k, v in scores.items()},
     }
     fit = data.learn(**choice, info=info)
-    out = DISCREPANCY / fastmodel.fill_discrepancy_file(args.fill)
+    out = DISCREPANCY / fills.fill_discrepancy_file(args.fill)
     atomic_write(out, fit.to_json())
     median, mean = scores[label(choice)]
     print(f"learned the {args.fill} correction: {label(choice)} (solid discrepancy at, coordinates, penalty"

@@ -15,7 +15,8 @@ from diefab.made.fill import Fill
 from diefab.made.mass import mass_properties
 from diefab.models import chain as chain_model
 from diefab.models.chain import landing_probabilities, roll_retention, tipping_barriers
-from diefab.models.fast import Discrepancy, fast_model, gem_discrepancy
+from diefab.models.discrepancy import Discrepancy, gem_discrepancy
+from diefab.models.fast import fast_model
 from diefab.models.probabilities import MODELS, value_probabilities
 
 BOUNDS = GEM.bounds(["a", "b", "c", "d", "e"])

@@ -14,15 +14,9 @@ from diefab.geometry.polyhedron import face_margins
 from diefab.made.fill import Fill
 from diefab.made.mass import mass_properties
 from diefab.models.chain import landing_probabilities
-from diefab.models.fast import (
-    FILL_COORDINATES,
-    FILL_LAYERS,
-    FillCorrection,
-    body_excess,
-    fast_model,
-    fill_discrepancy,
-    gem_discrepancy,
-)
+from diefab.models.discrepancy import gem_discrepancy
+from diefab.models.fast import fast_model
+from diefab.models.fills import FILL_COORDINATES, FILL_LAYERS, FillCorrection, body_excess, fill_discrepancy
 
 MIRRORS = ((0, 2), (1, 3), (5, 7), (6, 8))
 

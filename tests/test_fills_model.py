@@ -13,7 +13,8 @@ from diefab.dice.readings import unreadable
 from diefab.made.fill import Fill
 from diefab.made.mass import mass_properties
 from diefab.models.chain import landing_probabilities, roll_retention
-from diefab.models.fast import Discrepancy, fast_model
+from diefab.models.discrepancy import Discrepancy
+from diefab.models.fast import fast_model
 from diefab.models.probabilities import FILL_MODELS, model_probabilities
 from diefab.search.optimize import Problem
 

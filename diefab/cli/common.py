@@ -36,7 +36,7 @@ def _json_default(obj: Any):
 
 def note_fast_fill(d: Design, model: str, fill: str) -> None:
     """One line on stderr when the fast model's gem correction would be extrapolated to another fill."""
-    from diefab.models.fast import fill_discrepancy
+    from diefab.models.fills import fill_discrepancy
 
     if model == "fast" and d.family == "gem" and fill != "solid" and fill_discrepancy(fill) is None:
         click.echo(
