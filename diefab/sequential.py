@@ -607,7 +607,12 @@ def _first_decision(prefix: np.ndarray, t, delta, alpha, prior, start: int) -> t
 
 
 def sequential_test(
-    rolls: Sequence[int], target, delta: float = 0.03, alpha: float = 0.05, *, prior: float = PRIOR,
+    rolls: Sequence[int],
+    target,
+    delta: float = 0.03,
+    alpha: float = 0.05,
+    *,
+    prior: float = PRIOR,
     estimate: bool = True,
 ) -> SequentialResult:
     """The anytime-valid verdict on rolls in the order rolled, checked after every one.
@@ -635,7 +640,12 @@ def sequential_test(
 
 
 def sequential_counts(
-    counts: Sequence[int], target, delta: float = 0.03, alpha: float = 0.05, *, prior: float = PRIOR,
+    counts: Sequence[int],
+    target,
+    delta: float = 0.03,
+    alpha: float = 0.05,
+    *,
+    prior: float = PRIOR,
     estimate: bool = True,
 ) -> SequentialResult:
     """The verdict on counts whose order is unknown: one look, at their total.
