@@ -21,7 +21,7 @@ Examples
 >>> counts = [0, 20, 48, 80, 89, 83, 66, 17, 2]
 >>> v = verdict(counts, t, "4dF", p_value=0.114, sequential=sequential_counts(counts, t, 0.03))
 >>> print(v.text)  # doctest: +ELLIPSIS
-indistinguishable from 4dF at 405 rolls (p = 0.11), but too few rolls to show it within TVD 0.03 ...
+indistinguishable from 4dF at 405 rolls (p = 0.11), but not yet shown within or off by TVD 0.03 ...
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ import numpy as np
 from .sequential import SequentialResult
 from .stats import noncentrality_for_power, pearson_divergence
 
-__all__ = ["LIFETIME_ROLLS", "NOTICE_POWER", "Verdict", "notice_rolls", "target_label", "verdict"]
+__all__ = ["LIFETIME_ROLLS", "NOTICE_POWER", "Verdict", "notice_rolls", "sequential_line", "target_label", "verdict"]
 
 #: Rolls of one die in a player's lifetime: some 40 rolls a week, every week, for 50 years.
 LIFETIME_ROLLS = 100_000
@@ -175,6 +175,28 @@ def verdict(
         )
     else:
         text = (
-            f"indistinguishable from {label} {seen}, but too few rolls to show it within TVD {s.delta:g} ({ci}): {more}"
+            f"indistinguishable from {label} {seen}, but not yet shown within or off by TVD {s.delta:g} ({ci}): {more}"
         )
     return Verdict(text, distinguishable, s.decision, noticed)
+
+
+def sequential_line(seq: SequentialResult, label: str) -> str:
+    """One line for an anytime-valid result: rolls, TVD, its interval, the decision or the rolls to go.
+
+    Examples
+    --------
+    >>> from diefab.sequential import sequential_counts
+    >>> print(sequential_line(sequential_counts([10, 90], [0.5, 0.5], 0.2), "a fair coin"))
+    100 rolls: TVD 0.400 to a fair coin, 95 % anytime CI 0.272–0.471: off a fair coin by at least TVD 0.2
+    """
+    level = f"{100 * (1 - seq.alpha):g} %"
+    head = (
+        f"{seq.n:,} rolls: TVD {seq.tvd:.3f} to {label}, {level} anytime CI {seq.tvd_low:.3f}\u2013{seq.tvd_high:.3f}"
+    )
+    at = "" if seq.decided_at is None or seq.decided_at == seq.n else f" (decided at roll {seq.decided_at:,})"
+    if seq.decision == "within":
+        return f"{head}: rolls like {label} within TVD {seq.delta:g}{at}"
+    if seq.decision == "off":
+        return f"{head}: off {label} by at least TVD {seq.delta:g}{at}"
+    more = "many more rolls" if seq.more_rolls is None else f"about {seq.more_rolls:,} more rolls"
+    return f"{head}: not yet within or off by TVD {seq.delta:g}; {more} likely needed"
