@@ -187,7 +187,7 @@ def sequential_line(seq: SequentialResult, label: str) -> str:
     --------
     >>> from diefab.sequential import sequential_counts
     >>> print(sequential_line(sequential_counts([10, 90], [0.5, 0.5], 0.2), "a fair coin"))
-    100 rolls: TVD 0.400 to a fair coin, 95 % anytime CI 0.272–0.471: off a fair coin by at least TVD 0.2
+    100 rolls: TVD 0.400 to a fair coin, 95 % anytime CI 0.251–0.476: off a fair coin by at least TVD 0.2
     """
     level = f"{100 * (1 - seq.alpha):g} %"
     head = (
