@@ -57,6 +57,7 @@ __all__ = [
     "is_roll_log",
     "parse_value",
     "read_log",
+    "remove_last_roll",
     "repair_log",
 ]
 
@@ -256,3 +257,26 @@ def append_roll(path: str | Path, roll: Roll) -> None:
         raise StatsError(f"cannot append to roll log {path}: {exc}") from exc
     finally:
         os.close(fd)
+
+
+def remove_last_roll(path: str | Path) -> Roll:
+    """Remove the last roll from the log (an undo) by cutting the file before its line; returns it.
+
+    A torn last line goes too.  The cut is one ``ftruncate`` followed by
+    ``fsync``: the log holds the roll or not, never part of it.
+    """
+    path = Path(path)
+    log = read_log(path)
+    if not log.rolls:
+        raise StatsError(f"roll log {path} has no roll to remove")
+    with open(path, "rb+") as f:
+        data = f.read()
+        lines = data[: data.rfind(b"\n") + 1].split(b"\n")[:-1]
+        while lines:  # drop trailing blank or comment lines, then the last roll's line
+            last = lines.pop().strip()
+            if last and not last.startswith(b"#"):
+                break
+        f.truncate(sum(len(line) + 1 for line in lines))
+        f.flush()
+        os.fsync(f.fileno())
+    return log.rolls[-1]

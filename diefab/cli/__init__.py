@@ -21,6 +21,7 @@ from .design import design
 from .net import net
 from .optimize import optimize
 from .predict import predict, templates
+from .roll import roll
 from .stats import stats
 from .stl import stl
 from .validate import validate
@@ -34,7 +35,7 @@ def cli() -> None:
     """Design, simulate and fabricate dice with unequal face probabilities."""
 
 
-for _command in (templates, predict, stats, design, optimize, validate, calibrate, net, stl):
+for _command in (templates, predict, stats, design, optimize, validate, calibrate, net, stl, roll):
     cli.add_command(_command)
 
 
