@@ -4,7 +4,7 @@
     python benchmarks/bench_sequential.py --quick    # fewer sequences
 
 Prints, by simulation with fixed seeds, for the targets 4dF, 2d6 and a
-uniform d6 (``diefab.sequential``, alpha = 0.05):
+uniform d6 (``diefab.stats.sequential``, alpha = 0.05):
 
 1. type-I error under monitoring after every roll, up to a horizon:
    - a die exactly at the target, wrongly called "off by >= delta";
@@ -34,9 +34,9 @@ import numpy as np
 from scipy.optimize import brentq
 from scipy.special import logsumexp
 
-from diefab.sequential import CONCENTRATIONS, FLOOR, PRIOR, SequentialTest, log_mixture_likelihood
-from diefab.stats import rolls_for_power, tvd
-from diefab.targets import parse_target
+from diefab.dice.targets import parse_target
+from diefab.stats.goodness import rolls_for_power, tvd
+from diefab.stats.sequential import CONCENTRATIONS, FLOOR, PRIOR, SequentialTest, log_mixture_likelihood
 
 ALPHA = 0.05
 TARGETS = ("4df", "2d6", "uniform:6")
@@ -165,7 +165,7 @@ def main() -> None:
     sequences, horizon = (200, 5_000) if args.quick else (1_000, 10_000)
     runs = 20 if args.quick else 60
     print(
-        f"diefab.sequential: mixture of Dirichlet({PRIOR}) and Dirichlet(beta t) for beta in {CONCENTRATIONS}, "
+        f"diefab.stats.sequential: mixture of Dirichlet({PRIOR}) and Dirichlet(beta t) for beta in {CONCENTRATIONS}, "
         f"alpha {ALPHA}, seed {args.seed}"
     )
     print(f"1. type-I error under monitoring after every roll (up to {horizon:,} rolls)")

@@ -9,9 +9,11 @@ import numpy as np
 import pytest
 from scipy.special import gammaln
 
-from diefab import sequential as seq
-from diefab.errors import StatsError
-from diefab.sequential import (
+from diefab.core.errors import StatsError
+from diefab.dice.targets import parse_target
+from diefab.stats import sequential as seq
+from diefab.stats.goodness import tvd
+from diefab.stats.sequential import (
     SequentialTest,
     ball_max_loglik,
     confidence_radius,
@@ -22,8 +24,6 @@ from diefab.sequential import (
     tvd_bounds,
     within_reached,
 )
-from diefab.stats import tvd
-from diefab.targets import parse_target
 
 FOUR_DF = parse_target("4df").probabilities
 TABLE2 = [0, 20, 48, 80, 89, 83, 66, 17, 2]

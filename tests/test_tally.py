@@ -8,11 +8,11 @@ import json
 import numpy as np
 import pytest
 
-from diefab.errors import StatsError
-from diefab.rolllog import HEADER, Roll, append_roll, read_log, remove_last_roll, repair_log
-from diefab.stats import read_roll_column
-from diefab.tally import Tally, value_keys
-from diefab.targets import parse_target
+from diefab.core.errors import StatsError
+from diefab.dice.targets import parse_target
+from diefab.stats.goodness import read_roll_column
+from diefab.stats.rolllog import HEADER, Roll, append_roll, read_log, remove_last_roll, repair_log
+from diefab.stats.tally import Tally, value_keys
 
 FOUR_DF = parse_target("4df")
 

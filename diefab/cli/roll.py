@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from .common import design_argument, get_design
+from diefab.cli.common import design_argument, get_design
 
 #: Width of the longest bar, in characters.
 BAR_WIDTH = 36
@@ -28,11 +28,11 @@ def roll(design, params, target, out, name, delta) -> None:
     and resumed; `diefab stats --rolls` and `diefab calibrate` read the log.
     One process at a time may write a log.
     """
-    from ..errors import OutputError, StatsError
-    from ..files import ensure_dir, output_path
-    from ..rolllog import read_log, repair_log
-    from ..tally import Tally
-    from ..verdict import sequential_line, target_label
+    from diefab.core.errors import OutputError, StatsError
+    from diefab.core.files import ensure_dir, output_path
+    from diefab.stats.rolllog import read_log, repair_log
+    from diefab.stats.tally import Tally
+    from diefab.stats.verdict import sequential_line, target_label
 
     try:
         import textual  # noqa: F401
@@ -65,7 +65,7 @@ def bars(tally, width: int = BAR_WIDTH):
     from rich.table import Table
     from rich.text import Text
 
-    from ..design import format_value
+    from diefab.dice.design import format_value
 
     n = tally.n
     observed = tally.counts / n if n else tally.counts * 0.0
@@ -90,10 +90,10 @@ def roll_app(tally, path: Path, title: str, label: str):
     from textual.app import App, ComposeResult
     from textual.widgets import Footer, Static
 
-    from ..errors import DiefabError
-    from ..rolllog import Roll, append_roll, remove_last_roll
-    from ..tally import QUIT_KEYS, UNDO_KEYS
-    from ..verdict import sequential_line
+    from diefab.core.errors import DiefabError
+    from diefab.stats.rolllog import Roll, append_roll, remove_last_roll
+    from diefab.stats.tally import QUIT_KEYS, UNDO_KEYS
+    from diefab.stats.verdict import sequential_line
 
     class RollApp(App):
         """Hand tally: one key per value, undo, live counts and the verdict."""

@@ -7,8 +7,8 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..design import format_value
-from .common import console, emit_json, json_option, seed_option
+from diefab.cli.common import console, emit_json, json_option, seed_option
+from diefab.dice.design import format_value
 
 
 @click.command()
@@ -34,11 +34,18 @@ def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, del
     The verdict is anytime-valid: a roll log (--rolls) is checked after
     every roll, so it may be run while rolling and stopped when it decides.
     """
-    from ..errors import StatsError
-    from ..sequential import sequential_counts, sequential_test
-    from ..stats import chi2_power, counts_from_rolls, goodness_of_fit, parse_counts, read_roll_column, rolls_for_power
-    from ..targets import parse_target
-    from ..verdict import target_label, verdict
+    from diefab.core.errors import StatsError
+    from diefab.dice.targets import parse_target
+    from diefab.stats.goodness import (
+        chi2_power,
+        counts_from_rolls,
+        goodness_of_fit,
+        parse_counts,
+        read_roll_column,
+        rolls_for_power,
+    )
+    from diefab.stats.sequential import sequential_counts, sequential_test
+    from diefab.stats.verdict import target_label, verdict
 
     if (counts is None) == (rolls is None):
         raise click.UsageError("give exactly one of --counts and --rolls")
@@ -123,7 +130,7 @@ def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, del
 
 def _sequential(seq, target: str, rolls: Path | None, column: str | None, as_json: bool) -> None:
     """``stats --sequential``: the anytime-valid verdict alone."""
-    from ..verdict import sequential_line, target_label
+    from diefab.stats.verdict import sequential_line, target_label
 
     out = {"target": target, "column": column, **seq.as_dict()}
     if as_json:
