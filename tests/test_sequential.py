@@ -177,6 +177,12 @@ def _tilted(t: np.ndarray, distance: float) -> np.ndarray:
     return p(brentq(lambda th: tvd(p(th), t) - distance, 0, 10))
 
 
+def _verdict(rolls: np.ndarray, t: np.ndarray, delta: float) -> str:
+    test = SequentialTest(t, delta)
+    test.extend(rolls)  # checked after every roll
+    return test.decision
+
+
 @pytest.mark.parametrize("spec", ["4df", "2d6"])
 def test_type_one_error_under_monitoring_after_every_roll(spec):
     # 60 dice exactly at the target, 60 at TVD delta, each monitored after every
@@ -185,14 +191,9 @@ def test_type_one_error_under_monitoring_after_every_roll(spec):
     t = parse_target(spec).probabilities
     delta = 0.05
     rng = np.random.default_rng(2026)
-    wrong_off = sum(
-        sequential_test(rng.choice(len(t), 1_500, p=t), t, delta, estimate=False).decision == "off" for _ in range(60)
-    )
+    wrong_off = sum(_verdict(rng.choice(len(t), 1_500, p=t), t, delta) == "off" for _ in range(60))
     boundary = _tilted(t, delta)
-    wrong_within = sum(
-        sequential_test(rng.choice(len(t), 1_500, p=boundary), t, delta, estimate=False).decision == "within"
-        for _ in range(60)
-    )
+    wrong_within = sum(_verdict(rng.choice(len(t), 1_500, p=boundary), t, delta) == "within" for _ in range(60))
     assert wrong_off <= 3 and wrong_within <= 3
 
 

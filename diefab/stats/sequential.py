@@ -469,9 +469,8 @@ def _grid(n: int) -> list[int]:
 
 
 def _project(c: np.ndarray, t: np.ndarray, delta: float, alpha: float) -> int | None:
-    """Fewest total rolls at which a die with the smoothed frequencies of `c` reaches a decision."""
-    k = len(c)
-    p = (c + PRIOR) / (c.sum() + k * PRIOR) if c.sum() > 0 else t.copy()
+    """Fewest total rolls at which a die like the one observed reaches a decision (None: beyond HORIZON)."""
+    p = _debiased(c, t)
     aim_within = tvd(p, t) < delta
 
     def decided(m: float) -> bool:
@@ -491,12 +490,33 @@ def _project(c: np.ndarray, t: np.ndarray, delta: float, alpha: float) -> int | 
     return hi
 
 
+def _debiased(c: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The observed frequencies shrunk towards the target by the part of their spread that is noise.
+
+    Under the target, n times the Pearson divergence of the frequencies has
+    mean k - 1; the deviation p̂ - t is scaled by sqrt(max(D - (k-1)/n, 0) / D)
+    so that the divergence kept is the excess over noise.  No roll: the target.
+    """
+    n = c.sum()
+    if n == 0:
+        return t.copy()
+    phat = c / n
+    live = t > 0
+    if np.any(c[~live] > 0):
+        return phat
+    d = float((((phat - t) ** 2)[live] / t[live]).sum())
+    excess = d - (live.sum() - 1) / n
+    scale = np.sqrt(excess / d) if excess > 0 else 0.0
+    return t + scale * (phat - t)
+
+
 def rolls_needed(counts: Sequence[int], target, delta: float, alpha: float = 0.05) -> int | None:
     """Estimated further rolls to a decision, if the die rolls as it has so far.
 
-    The counts' smoothed frequencies (the target itself before any roll) are
-    taken as the truth and scaled up until the verdict would be reached.
-    A plug-in estimate: a die close to the boundary `delta` needs many more.
+    The counts' frequencies, shrunk towards the target by their expected
+    noise (the target itself before any roll), are taken as the truth and
+    scaled up until the verdict would be reached.  A plug-in estimate: a die
+    close to the boundary `delta` needs many more.
 
     Examples
     --------

@@ -112,6 +112,12 @@ def notice_rolls(counts: Sequence[int], target, power: float = NOTICE_POWER, alp
     return math.ceil(noncentrality_for_power(df, power, alpha) / excess)
 
 
+def _about(n: int) -> str:
+    """A count to two significant figures, for estimates: 48,195 -> "48,000"."""
+    digits = max(len(str(int(n))) - 2, 0)
+    return f"{round(int(n), -digits):,}"
+
+
 def _p(p: float) -> str:
     return "p < 0.001" if p < 0.001 else f"p = {p:.2g}"
 
@@ -155,8 +161,8 @@ def verdict(
     if noticed is None or noticed > LIFETIME_ROLLS:
         notice = "no player will notice in a lifetime of rolls"
     else:
-        notice = f"a player would notice after about {noticed:,} rolls"
-    more = "many more rolls needed" if s.more_rolls is None else f"about {s.more_rolls:,} more rolls needed"
+        notice = f"a player would notice after about {_about(noticed)} rolls"
+    more = "many more rolls needed" if s.more_rolls is None else f"about {_about(s.more_rolls)} more rolls needed"
     seen = f"at {n:,} rolls ({_p(p_value)})"
     if s.decision == "within":
         text = f"rolls like {label} within TVD {s.delta:g} ({ci}): " + (
@@ -198,5 +204,5 @@ def sequential_line(seq: SequentialResult, label: str) -> str:
         return f"{head}: rolls like {label} within TVD {seq.delta:g}{at}"
     if seq.decision == "off":
         return f"{head}: off {label} by at least TVD {seq.delta:g}{at}"
-    more = "many more rolls" if seq.more_rolls is None else f"about {seq.more_rolls:,} more rolls"
+    more = "many more rolls" if seq.more_rolls is None else f"about {_about(seq.more_rolls)} more rolls"
     return f"{head}: not yet within or off by TVD {seq.delta:g}; {more} likely needed"
