@@ -136,3 +136,15 @@ def test_roll_app_records_every_key_in_the_log(tmp_path):
     assert "3 rolls" in verdict and "fair d6" in verdict
     resumed = Tally(t.values, t.probabilities, 0.05, rolls=read_log(path).values)
     assert resumed.counts.tolist() == tally.counts.tolist()
+
+
+def test_calibrate_reads_a_roll_log(tmp_path):
+    from diefab.dice.design import load_design
+    from diefab.search.calibrate import real_die
+
+    design = load_design("fudge-gem-paper")
+    path = tmp_path / "gem.rolls.csv"
+    for v in [-1, 0, 0, 2, -4]:
+        append_roll(path, Roll.now(v))
+    die = real_die(design.name, design, str(path))
+    assert die.n == 5 and die.counts.tolist() == [1, 0, 0, 1, 2, 0, 1, 0, 0]
