@@ -59,10 +59,12 @@ def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, del
     else:
         goal = parse_target(target)
         values, column = read_roll_column(rolls)
+        if not as_json:
+            console().print(f"read column {column!r} of {rolls}" if column else f"read {len(values)} rolls of {rolls}")
         x = counts_from_rolls(values, goal.values)
         seq = sequential_test(np.searchsorted(goal.values, values), goal.probabilities, delta, alpha)
     if sequential:
-        return _sequential(seq, target, rolls, column, as_json)
+        return _sequential(seq, target, column, as_json)
     fit = goodness_of_fit(x, goal.probabilities, alpha=alpha, seed=seed)
     observed = fit.observed
     power_n = rolls_for_power(goal.probabilities, observed, method="monte-carlo", seed=seed)
@@ -101,8 +103,6 @@ def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, del
     from rich.table import Table
 
     con = console()
-    if column is not None:
-        con.print(f"read column {column!r} of {rolls}")
     table = Table("value", "count", "expected", "observed", f"{1 - alpha:.0%} simultaneous CI", "target")
     signed = min(goal.values) < 0
     for v, c, e, o, (lo, hi), p in zip(goal.values, x, fit.expected, observed, fit.intervals, goal.probabilities):
@@ -128,7 +128,7 @@ def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, del
     con.print(f"verdict: {said.text}")
 
 
-def _sequential(seq, target: str, rolls: Path | None, column: str | None, as_json: bool) -> None:
+def _sequential(seq, target: str, column: str | None, as_json: bool) -> None:
     """``stats --sequential``: the anytime-valid verdict alone."""
     from diefab.stats.verdict import sequential_line, target_label
 
@@ -136,7 +136,4 @@ def _sequential(seq, target: str, rolls: Path | None, column: str | None, as_jso
     if as_json:
         emit_json(out)
         return
-    con = console()
-    if column is not None:
-        con.print(f"read column {column!r} of {rolls}")
-    con.print(sequential_line(seq, target_label(target)))
+    console().print(sequential_line(seq, target_label(target)))
