@@ -114,10 +114,10 @@ def test_clear_cases_are_decided():
     assert sequential_counts([10, 90], [0.5, 0.5], delta=0.2).decision == "off"
     rng = np.random.default_rng(7)
     t = parse_target("uniform:6").probabilities
-    fair = rng.choice(6, size=20_000, p=t)
+    fair = rng.choice(6, size=5_000, p=t)
     res = sequential_test(fair, t, delta=0.05)
     assert res.decision == "within" and res.tvd_high <= 0.05
-    loaded = rng.choice(6, size=20_000, p=[0.1, 0.1, 0.15, 0.15, 0.2, 0.3])  # TVD 0.167 from fair
+    loaded = rng.choice(6, size=3_000, p=[0.1, 0.1, 0.15, 0.15, 0.2, 0.3])  # TVD 0.167 from fair
     res = sequential_test(loaded, t, delta=0.05)
     assert res.decision == "off" and res.tvd_low >= 0.05 and res.decided_at < 2_000
 
@@ -131,7 +131,7 @@ def test_table_two_is_undecided_with_an_honest_interval():
 def test_incremental_and_batch_agree_and_undo_restores():
     rng = np.random.default_rng(3)
     t = np.array([0.2, 0.3, 0.5])
-    rolls = rng.choice(3, size=400, p=[0.45, 0.3, 0.25])
+    rolls = rng.choice(3, size=200, p=[0.5, 0.3, 0.2])
     batch = sequential_test(rolls, t, delta=0.1)
     test = SequentialTest(t, 0.1)
     for r in rolls:

@@ -189,7 +189,35 @@ def _solve_increasing(f, lo: np.ndarray, hi: np.ndarray, goal: np.ndarray) -> np
     return hi
 
 
-def ball_max_loglik(counts, target, delta: float) -> np.ndarray | float:
+def _raise_scale(c: np.ndarray, t: np.ndarray, knee: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """(m,) the a > 0 with sum_j (a c_j - t_j)^+ = d, exactly (the sum is piecewise linear in a)."""
+    order = np.argsort(knee, axis=1)
+    ks = np.take_along_axis(knee, order, axis=1)
+    cs = np.cumsum(np.take_along_axis(c, order, axis=1), axis=1)
+    ts = np.cumsum(np.take_along_axis(t, order, axis=1), axis=1)
+    nxt = np.concatenate([ks[:, 1:], np.full((len(ks), 1), np.inf)], axis=1)
+    with np.errstate(invalid="ignore"):
+        reach = np.where(cs > 0, nxt * cs - ts, -np.inf) >= d[:, None]  # the sum at the next knee
+    m = np.argmax(reach, axis=1)[:, None]
+    return ((d[:, None] + np.take_along_axis(ts, m, axis=1)) / np.take_along_axis(cs, m, axis=1))[:, 0]
+
+
+def _lower_scale(c: np.ndarray, t: np.ndarray, knee: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """(m,) the b with sum_j (t_j - b c_j)^+ = d, exactly; inf when the unrolled values hold d."""
+    order = np.argsort(-knee, axis=1)  # unrolled values (knee inf) first: always lowered
+    ks = np.take_along_axis(knee, order, axis=1)
+    cs = np.cumsum(np.take_along_axis(c, order, axis=1), axis=1)
+    ts = np.cumsum(np.take_along_axis(t, order, axis=1), axis=1)
+    nxt = np.concatenate([ks[:, 1:], np.zeros((len(ks), 1))], axis=1)
+    with np.errstate(invalid="ignore"):
+        reach = np.where(cs > 0, ts - nxt * cs, ts) >= d[:, None]  # the sum at the next knee down
+    m = np.argmax(reach, axis=1)[:, None]
+    cm, tm = np.take_along_axis(cs, m, axis=1)[:, 0], np.take_along_axis(ts, m, axis=1)[:, 0]
+    with np.errstate(divide="ignore"):
+        return np.where(cm > 0, (tm - d) / np.where(cm > 0, cm, 1), np.inf)
+
+
+def ball_max_loglik(counts, target, delta) -> np.ndarray | float:
     """Largest log-likelihood ``sum c_j log p_j`` over distributions within TVD `delta` of `target`.
 
     The maximizer is ``p_j = clip(t_j, a c_j, b c_j)``: values rolled more
@@ -200,7 +228,7 @@ def ball_max_loglik(counts, target, delta: float) -> np.ndarray | float:
     ----------
     counts : (k,) or (m, k) float
     target : (k,) float
-    delta : float, TVD in [0, 1]
+    delta : float or (m,) float, TVD in [0, 1]
 
     Returns
     -------
@@ -223,23 +251,15 @@ def ball_max_loglik(counts, target, delta: float) -> np.ndarray | float:
         at_target = np.where(np.any((c > 0) & (t <= 0), axis=1), -np.inf, at_target)
     phat = c / np.where(n > 0, n, 1)[:, None]
     dist = 0.5 * np.abs(phat - t).sum(axis=1)
-    out = np.where(dist <= delta, best, at_target)
-    todo = (dist > delta) & (delta > 0) & (n > 0)
+    d = np.broadcast_to(np.asarray(delta, float), n.shape)
+    out = np.where(dist <= d, best, at_target)
+    todo = (dist > d) & (d > 0) & (n > 0)
     if np.any(todo):
-        cc, tt = c[todo], t[todo]
-        zero = (tt * (cc == 0)).sum(axis=1)
-
-        def raised(a):
-            return np.clip(a[:, None] * cc - tt, 0, None).sum(axis=1)
-
-        def lowered_neg(b):
-            return -np.clip(tt - b[:, None] * cc, 0, None).sum(axis=1)
-
-        cmax = cc.max(axis=1)
-        a = _solve_increasing(raised, np.zeros(len(cc)), (1 + delta) / cmax, np.full(len(cc), delta))
-        ratio = np.where(cc > 0, tt / np.where(cc > 0, cc, 1), 0).max(axis=1)
-        b = _solve_increasing(lowered_neg, np.zeros(len(cc)), ratio + 1e-300, np.full(len(cc), -delta))
-        b = np.where(zero >= delta, np.inf, b)
+        cc, tt, dd = c[todo], t[todo], d[todo]
+        with np.errstate(divide="ignore"):
+            knee = np.where(cc > 0, tt / np.where(cc > 0, cc, 1), np.inf)  # a c_j passes t_j beyond a = knee_j
+        a = _raise_scale(cc, tt, knee, dd)
+        b = _lower_scale(cc, tt, knee, dd)
         with np.errstate(invalid="ignore"):
             p = np.maximum(a[:, None] * cc, np.minimum(tt, b[:, None] * cc))
         out[todo] = xlogy(cc, np.where(cc > 0, p, 1)).sum(axis=1)
@@ -396,14 +416,16 @@ def tvd_bounds(counts: Sequence[int], target, alpha: float = 0.05) -> tuple[floa
     point = tvd(x, t)
     if ball_max_loglik(c, t, 0.0) > threshold:
         return 0.0, high
+    # the smallest delta whose ball reaches the threshold: ball_max_loglik increases with delta;
+    # four rounds of 64 evaluations at once narrow [0, point] to 64^-4 of it
     low, up = 0.0, point
-    for _ in range(_STEPS):
-        mid = 0.5 * (low + up)
-        if ball_max_loglik(c, t, mid) > threshold:
-            up = mid
-        else:
-            low = mid
-    return low, max(high, low)
+    rows = np.broadcast_to(c, (65, len(c)))
+    for _ in range(4):
+        grid = np.linspace(low, up, 65)
+        inside = ball_max_loglik(rows, t, grid) > threshold
+        first = int(np.argmax(inside)) if inside.any() else 64
+        low, up = grid[max(first - 1, 0)], grid[first]
+    return float(low), float(max(high, low))
 
 
 @dataclass(frozen=True)
