@@ -64,7 +64,7 @@ import numpy as np
 from scipy.special import gammaln, logsumexp, xlogy
 
 from diefab.core.errors import StatsError
-from diefab.stats.goodness import check_counts, check_probabilities, tvd
+from diefab.stats.goodness import check_counts, check_probabilities, expected_tvd_exact, tvd
 
 __all__ = [
     "EXACT_VALUES",
@@ -489,8 +489,12 @@ def _project(c: np.ndarray, t: np.ndarray, delta: float, alpha: float) -> int | 
 
     def decided(m: float) -> bool:
         row = (m * p)[None, :]
-        reached = within_reached if aim_within else off_reached
-        return bool(reached(row, t, delta, alpha)[0])
+        if not aim_within:
+            return bool(off_reached(row, t, delta, alpha)[0])
+        # real frequencies wander from p by about the mean TVD of m rolls, which the
+        # noiseless counts m p do not: ask for that much margin inside delta
+        margin = delta - expected_tvd_exact(p, m)
+        return margin > 0 and bool(within_reached(row, t, margin, alpha)[0])
 
     lo = max(int(c.sum()), 1)
     hi = lo
@@ -529,14 +533,15 @@ def rolls_needed(counts: Sequence[int], target, delta: float, alpha: float = 0.0
 
     The counts' frequencies, shrunk towards the target by their expected
     noise (the target itself before any roll), are taken as the truth and
-    scaled up until the verdict would be reached.  A plug-in estimate: a die
+    scaled up until the verdict would be reached; a "within" is asked to hold
+    with a margin of the frequencies' own expected wander (mean TVD).  A plug-in estimate: a die
     close to the boundary `delta` needs many more.
 
     Examples
     --------
-    A coin exactly fair needs several hundred flips to be shown within 0.05 of fair:
+    A coin exactly fair needs about a thousand flips to be shown within 0.05 of fair:
 
-    >>> 500 < rolls_needed([0, 0], [0.5, 0.5], 0.05) < 1_000
+    >>> 1_000 < rolls_needed([0, 0], [0.5, 0.5], 0.05) < 2_000
     True
     """
     c = np.asarray(check_counts(counts), float)
