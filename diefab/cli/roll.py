@@ -91,6 +91,7 @@ def roll_app(tally, path: Path, title: str, label: str):
     from textual.widgets import Footer, Static
 
     from diefab.core.errors import DiefabError
+    from diefab.dice.design import format_value
     from diefab.stats.rolllog import Roll, append_roll, remove_last_roll
     from diefab.stats.tally import QUIT_KEYS, UNDO_KEYS
     from diefab.stats.verdict import sequential_line
@@ -99,6 +100,7 @@ def roll_app(tally, path: Path, title: str, label: str):
         """Hand tally: one key per value, undo, live counts and the verdict."""
 
         CSS = "Static { padding: 0 1; } #verdict { text-style: bold; }"
+        TITLE = "diefab roll"
 
         def __init__(self) -> None:
             super().__init__()
@@ -109,8 +111,8 @@ def roll_app(tally, path: Path, title: str, label: str):
             yield Static(id="table")
             yield Static(id="verdict")
             yield Static(id="status")
-            keys = "  ".join(f"{k}={v:+d}" if min(tally.values) < 0 else f"{k}={v}" for k, v in
-                             zip(tally.keys, tally.values))  # fmt: skip
+            signed = min(tally.values) < 0
+            keys = "  ".join(f"{k}={format_value(v, signed)}" for k, v in zip(tally.keys, tally.values))
             yield Static(f"keys: {keys}   undo: {'/'.join(UNDO_KEYS)}   quit: {'/'.join(QUIT_KEYS)}", id="keys")
             yield Footer()
 
