@@ -176,7 +176,7 @@ def verdict(
         )
     elif distinguishable:
         text = (
-            f"distinguishable from {label} {seen} ({ci}); not yet shown within or off by TVD {s.delta:g}: "
+            f"distinguishable from {label} {seen}; {ci}; not yet shown within or off by TVD {s.delta:g}: "
             f"{more}; {notice}"
         )
     else:
