@@ -606,12 +606,12 @@ class SequentialTest:
             raise StatsError(f"value index {index!r} is not in 0..{len(self.target) - 1}")
         self._rolls.append(int(index))
         self._counts[int(index)] += 1
+        self._check_now()
+
+    def _check_now(self) -> None:
+        """Decide on the counts now, unless decided already."""
         if self._decided is None:
-            row = self._counts[None, :].astype(float)
-            if off_reached(row, self.target, self.delta, self.alpha)[0]:
-                self._decided = ("off", self.n)
-            elif within_reached(row, self.target, self.delta, self.alpha)[0]:
-                self._decided = ("within", self.n)
+            self._decided = _first_decision(self._counts[None, :], self.target, self.delta, self.alpha, self.n - 1)
 
     def extend(self, indices: Sequence[int]) -> None:
         """Add many rolls at once (checked after every one, vectorized)."""
@@ -744,10 +744,6 @@ def sequential_counts(
     test = SequentialTest(t, delta, alpha)
     test._rolls = np.repeat(np.arange(len(t)), c).tolist()
     test._counts = c.copy()
-    row = c[None, :].astype(float)
-    if off_reached(row, t, delta, alpha)[0]:
-        test._decided = ("off", test.n)
-    elif within_reached(row, t, delta, alpha)[0]:
-        test._decided = ("within", test.n)
+    test._check_now()
     test._ordered = False
     return test.result(estimate=estimate)
