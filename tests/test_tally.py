@@ -104,6 +104,7 @@ def test_stats_bad_token_is_one_line(bad, tmp_path):
 
 
 def test_roll_refuses_a_second_process_and_needs_a_terminal(bad, tmp_path):
+    pytest.importorskip("textual")
     from filelock import FileLock
 
     lock = FileLock(str(tmp_path / "d6.rolls.csv") + ".lock")
