@@ -164,7 +164,7 @@ def main() -> None:
     ap.add_argument("--part", type=int, choices=(1, 2), default=None, help="only part 1 or part 2")
     args = ap.parse_args()
     sequences, horizon = (200, 5_000) if args.quick else (1_000, 10_000)
-    runs = 20 if args.quick else 40
+    runs = 20 if args.quick else 60
     print(
         f"diefab.stats.sequential: mixture of Dirichlet({PRIOR}) and Dirichlet(beta t) for beta in {CONCENTRATIONS}, "
         f"alpha {ALPHA}, seed {args.seed}"
