@@ -20,6 +20,7 @@ from diefab.cli.design import design
 from diefab.cli.net import net
 from diefab.cli.optimize import optimize
 from diefab.cli.predict import predict, templates
+from diefab.cli.roll import roll
 from diefab.cli.stats import stats
 from diefab.cli.stl import stl
 from diefab.cli.studio import studio
@@ -35,7 +36,7 @@ def cli() -> None:
     """Design, simulate and fabricate dice with unequal face probabilities."""
 
 
-for _command in (templates, predict, stats, design, optimize, validate, calibrate, net, stl, studio):
+for _command in (templates, predict, stats, design, optimize, validate, calibrate, net, stl, roll, studio):
     cli.add_command(_command)
 
 

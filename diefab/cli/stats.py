@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
+import numpy as np
 
 from diefab.cli.common import console, emit_json, json_option, seed_option
 from diefab.dice.design import format_value
@@ -20,10 +21,19 @@ from diefab.dice.design import format_value
 )
 @click.option("--target", required=True, help="Target distribution, e.g. 4df or 1,4,10,16,19,16,10,4,1.")
 @click.option("--alpha", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.05, show_default=True)
+@click.option("--delta", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.03, show_default=True,
+              help="Tolerance in TVD of the verdict: within it of the target, or off by at least it.")  # fmt: skip
+@click.option("--sequential", is_flag=True,
+              help="Only the anytime-valid verdict (valid however often the log was checked).")  # fmt: skip
 @seed_option("Seed of the Monte-Carlo p-value.")
 @json_option
-def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, seed: int, as_json: bool) -> None:
-    """Test rolls against a target: chi2, G, TVD, JSD, intervals, power."""
+def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, delta: float, sequential: bool,
+          seed: int, as_json: bool) -> None:  # fmt: skip
+    """Test rolls against a target: chi2, G, TVD, JSD, intervals, power, and a plain verdict.
+
+    The verdict is anytime-valid: a roll log (--rolls) is checked after
+    every roll, so it may be run while rolling and stopped when it decides.
+    """
     from diefab.core.errors import StatsError
     from diefab.dice.targets import parse_target
     from diefab.stats.goodness import (
@@ -31,20 +41,30 @@ def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, see
         counts_from_rolls,
         goodness_of_fit,
         parse_counts,
-        read_rolls,
+        read_roll_column,
         rolls_for_power,
     )
+    from diefab.stats.sequential import sequential_counts, sequential_test
+    from diefab.stats.verdict import target_label, verdict
 
     if (counts is None) == (rolls is None):
         raise click.UsageError("give exactly one of --counts and --rolls")
+    column = None
     if counts is not None:
         x = parse_counts(counts)
         goal = parse_target(target)
         if len(x) != len(goal.values):
             raise StatsError(f"{len(x)} counts for the {len(goal.values)} values of target {target!r}")
+        seq = sequential_counts(x, goal.probabilities, delta, alpha)
     else:
         goal = parse_target(target)
-        x = counts_from_rolls(read_rolls(rolls), goal.values)
+        values, column = read_roll_column(rolls)
+        if not as_json:
+            console().print(f"read column {column!r} of {rolls}" if column else f"read {len(values)} rolls of {rolls}")
+        x = counts_from_rolls(values, goal.values)
+        seq = sequential_test(np.searchsorted(goal.values, values), goal.probabilities, delta, alpha)
+    if sequential:
+        return _sequential(seq, target, column, as_json)
     fit = goodness_of_fit(x, goal.probabilities, alpha=alpha, seed=seed)
     observed = fit.observed
     power_n = rolls_for_power(goal.probabilities, observed, method="monte-carlo", seed=seed)
@@ -72,7 +92,11 @@ def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, see
         "power_at_n_noncentral": chi2_power(goal.probabilities, observed, fit.n, alpha),
         "rolls_for_80_percent_power": power_n,
         "rolls_for_80_percent_power_noncentral": rolls_for_power(goal.probabilities, observed),
+        "column": column,
+        "sequential": seq.as_dict(),
     }
+    said = verdict(x, goal.probabilities, target_label(target), p_value=fit.p_value, sequential=seq, alpha=alpha)
+    result["verdict"] = said.text
     if as_json:
         emit_json(result)
         return
@@ -101,3 +125,15 @@ def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, see
             f"If the observed frequencies were the truth, the chi2 test would detect them with power "
             f"{result['power_at_n']:.2f} at n = {fit.n}, and 80% power needs {power_n} rolls."
         )
+    con.print(f"verdict: {said.text}")
+
+
+def _sequential(seq, target: str, column: str | None, as_json: bool) -> None:
+    """``stats --sequential``: the anytime-valid verdict alone."""
+    from diefab.stats.verdict import sequential_line, target_label
+
+    out = {"target": target, "column": column, **seq.as_dict()}
+    if as_json:
+        emit_json(out)
+        return
+    console().print(sequential_line(seq, target_label(target)))

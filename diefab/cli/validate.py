@@ -39,6 +39,8 @@ from diefab.dice.design import format_value
               help="Write a bar chart to FILE (.png or .svg).")  # fmt: skip
 @fill_options("paper", "print")
 @click.option("--target", default=None, help="Override the design's target distribution.")
+@click.option("--delta", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.03, show_default=True,
+              help="Tolerance in TVD of the verdict: within it of the target, or off by at least it.")  # fmt: skip
 @click.option("--sensitivity", is_flag=True,
               help="Validate under each standard throw and table (the shipped profiles soft-tray, wooden-table, "
               "hard-tray, low-spin, high-spin) and report the TVD to the target of each and the worst.")  # fmt: skip
@@ -46,8 +48,8 @@ from diefab.dice.design import format_value
 @physics_options
 @json_option
 @click.pass_context
-def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, target, sensitivity, physics_profile,
-             as_json, **physics) -> None:  # fmt: skip
+def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, target, delta, sensitivity,
+             physics_profile, as_json, **physics) -> None:  # fmt: skip
     """Drop DESIGN many times in pybullet and test the counts against its target.
 
     With --sensitivity, drop it under each standard throw and table instead
@@ -61,6 +63,8 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
     from diefab.models.probabilities import value_probabilities
     from diefab.physics.simulate import SimulationInterrupted, plot_validation, simulate
     from diefab.stats.goodness import goodness_of_fit
+    from diefab.stats.sequential import sequential_counts
+    from diefab.stats.verdict import target_label, verdict
 
     fill = pop_fill(physics)
     if scheduler is not None:
@@ -98,6 +102,8 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
     counts = result.value_counts(d)
     goal = d.target_distribution.aligned(d.support)
     fit = goodness_of_fit(counts, goal, seed=seed)
+    seq = sequential_counts(counts, goal, delta)
+    said = verdict(counts, goal, target_label(d.target), p_value=fit.p_value, sequential=seq)
     model = value_probabilities(d, "solid-angle")
     keys = [str(v) for v in d.support]
     # values the target never rolls, rolled: counted and reported (they reject the target outright)
@@ -132,6 +138,8 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
         "seconds": result.seconds,
         "drops_per_second": result.drops_per_second,
         "settings": settings.as_dict(),
+        "sequential": seq.as_dict(),
+        "verdict": said.text,
     }
     if plot_file is not None:
         atomic_write(plot_file, plot_validation(d, result, fmt=plot_file.suffix.lower()[1:]),
@@ -163,6 +171,7 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
     con.print(f"chi2 = {fit.chi2:.3f} (df {fit.df}), p = {fit.p_value:.4g} (Monte-Carlo {fit.p_value_mc:.4g})")
     con.print(f"TVD = {fit.tvd:.4f} (expected under the target {fit.expected_tvd:.4f})   "
               f"JSD = {fit.jsd:.5f} (expected {fit.expected_jsd:.5f})")  # fmt: skip
+    con.print(f"verdict: {said.text}")
     if plot_file is not None:
         con.print(f"wrote {plot_file}")
 

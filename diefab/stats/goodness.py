@@ -24,6 +24,7 @@ import numpy as np
 
 from diefab.core.errors import StatsError
 from diefab.core.tolerances import PROBABILITY_SUM
+from diefab.stats.rolllog import is_roll_log, parse_value, read_log
 
 __all__ = [
     "MAX_COUNT",
@@ -38,8 +39,10 @@ __all__ = [
     "goodman_intervals",
     "goodness_of_fit",
     "jsd",
+    "noncentrality_for_power",
     "parse_counts",
     "pearson_divergence",
+    "read_roll_column",
     "read_rolls",
     "rolls_for_power",
     "tvd",
@@ -161,6 +164,27 @@ def chi2_power(
     return float(chi2.sf(crit, df)) if lam == 0 else float(ncx2.sf(crit, df, lam))
 
 
+def noncentrality_for_power(df: int, power: float = 0.8, alpha: float = 0.05) -> float:
+    """Noncentrality at which a chi-square test with `df` degrees of freedom has this power.
+
+    A die whose Pearson divergence from the target is D gives noncentrality
+    n D after n rolls, so it is detected at about ``this / D`` rolls.
+
+    Examples
+    --------
+    >>> round(noncentrality_for_power(1, 0.5, 0.05), 2)  # 1.96 squared, nearly
+    3.84
+    """
+    from scipy.optimize import brentq
+    from scipy.stats import chi2, ncx2
+
+    crit = chi2.ppf(1 - alpha, df)
+    hi = 1.0
+    while ncx2.sf(crit, df, hi) < power:
+        hi *= 2
+    return float(brentq(lambda x: ncx2.sf(crit, df, x) - power, 0.0, hi, xtol=1e-10))
+
+
 def rolls_for_power(
     p: Sequence[float],
     q: Sequence[float],
@@ -177,19 +201,11 @@ def rolls_for_power(
     one bisects on the simulated power with common random numbers, starting
     from the noncentral estimate.
     """
-    from scipy.optimize import brentq
-    from scipy.stats import chi2, ncx2
-
     delta = pearson_divergence(q, p)
     if delta <= 0:
         return None
     df = int(np.count_nonzero(np.asarray(p) > 0)) - 1
-    crit = chi2.ppf(1 - alpha, df)
-    hi = 1.0
-    while ncx2.sf(crit, df, hi) < power:
-        hi *= 2
-    lam = brentq(lambda x: ncx2.sf(crit, df, x) - power, 0.0, hi, xtol=1e-10)
-    n = int(np.ceil(lam / delta))
+    n = int(np.ceil(noncentrality_for_power(df, power, alpha) / delta))
     if method == "noncentral":
         return n
 
@@ -400,30 +416,42 @@ def _short(text: str, width: int = 40) -> str:
     return text if len(text) <= width else text[: width - 3] + "..."
 
 
-_HEADER_NAMES = ("value", "roll", "result", "outcome", "face")
-
-
-def _parse_value(token: str, where: str) -> int:
-    t = token.strip().replace("\u2212", "-").replace("\u2013", "-")
-    if not re.fullmatch(r"[+-]?\d+", t):
-        raise StatsError(f"{where}: {_short(token.strip())!r} is not a whole-number roll")
-    if len(t.lstrip("+-").lstrip("0")) > 9:
-        raise StatsError(f"{where}: {_short(token.strip())!r} is not a die value (magnitude at most 10^9)")
-    return int(t)
+#: Column names a roll log's values are read from, in order of preference (exact, case-insensitive).
+ROLL_COLUMNS = ("value", "roll", "result", "outcome", "face", "total")
 
 
 def read_rolls(path: str | Path) -> np.ndarray:
-    """Rolled values from a text or CSV log.
-
-    Accepted: values separated by commas, spaces, semicolons or newlines;
-    ``#`` comments; or a CSV file with a header naming a column ``value``,
-    ``roll``, ``result``, ``outcome`` or ``face``.  ``+2`` and ``−3`` (true
-    minus) are read as numbers.
+    """Rolled values from a text or CSV log (see :func:`read_roll_column`).
 
     Returns
     -------
     (n,) int
         The rolls in order.
+    """
+    return read_roll_column(path)[0]
+
+
+def read_roll_column(path: str | Path) -> tuple[np.ndarray, str | None]:
+    """Rolled values from a text or CSV log, and the name of the column read.
+
+    Accepted: a roll log (:mod:`diefab.stats.rolllog`); values separated by commas,
+    spaces, semicolons or newlines, with ``#`` comments; or a CSV file whose
+    header names a column ``value``, ``roll``, ``result``, ``outcome``,
+    ``face`` or ``total`` (the first of these present, matched exactly and
+    case-insensitively; full-line ``#`` comments).  ``+2`` and ``−3`` (true
+    minus) are read as numbers.
+
+    Returns
+    -------
+    rolls : (n,) int
+        The rolls in order.
+    column : str or None
+        The header of the column read (None for a plain list of values).
+
+    Raises
+    ------
+    StatsError
+        Naming the file, line and token of the first bad value.
     """
     path = Path(path)
     if path.exists() and not path.is_file():
@@ -434,31 +462,46 @@ def read_rolls(path: str | Path) -> np.ndarray:
         text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise StatsError(f"cannot read roll log {path}: {exc}") from exc
-    lines = [(i + 1, line.split("#", 1)[0]) for i, line in enumerate(text.splitlines())]
-    lines = [(i, line) for i, line in lines if line.strip()]
+    lines = [(i + 1, line) for i, line in enumerate(text.splitlines())]
+    lines = [(i, line) for i, line in lines if line.strip() and not line.lstrip().startswith("#")]
     if not lines:
         raise StatsError(f"roll log {path} is empty")
-    rolls: list[int] = []
     first = lines[0][1]
-    if re.search(r"[A-Za-z]", first):
-        header = next(csv.reader(io.StringIO(first)))
-        names = [h.strip().lower() for h in header]
-        column = next((names.index(h) for h in _HEADER_NAMES if h in names), None)
-        if column is None:
-            raise StatsError(
-                f"{path}:{lines[0][0]}: header {first.strip()!r} names no column {'/'.join(_HEADER_NAMES)}"
-            )
-        for i, line in lines[1:]:
-            row = next(csv.reader(io.StringIO(line)))
-            if column >= len(row):
-                raise StatsError(f"{path}:{i}: row has no column {header[column]!r}")
-            rolls.append(_parse_value(row[column], f"{path}:{i}"))
+    if is_roll_log(first):
+        values = read_log(path).values
+        column: str | None = "value"
+    elif re.search(r"[A-Za-z]", first.split("#", 1)[0]):
+        values, column = _read_column(path, lines)
     else:
-        for i, line in lines:
-            rolls.extend(_parse_value(t, f"{path}:{i}") for t in re.split(r"[,\s;]+", line.strip()) if t)
-    if not rolls:
+        column = None
+        values = [
+            parse_value(t, f"{path}:{i}")
+            for i, line in lines
+            for t in re.split(r"[,\s;]+", line.split("#", 1)[0].strip())
+            if t
+        ]
+    if len(values) == 0:
         raise StatsError(f"roll log {path} has no rolls")
-    return np.array(rolls, dtype=np.int64)
+    return np.asarray(values, dtype=np.int64), column
+
+
+def _read_column(path: Path, lines: list[tuple[int, str]]) -> tuple[list[int], str]:
+    """The values of the preferred column of a CSV file with a header."""
+    header = next(csv.reader(io.StringIO(lines[0][1])))
+    names = [h.strip().lower() for h in header]
+    column = next((names.index(h) for h in ROLL_COLUMNS if h in names), None)
+    if column is None:
+        raise StatsError(
+            f"{path}:{lines[0][0]}: header {_short(lines[0][1].strip())!r} names no column {'/'.join(ROLL_COLUMNS)}"
+        )
+    name = header[column].strip()
+    values = []
+    for i, line in lines[1:]:
+        row = next(csv.reader(io.StringIO(line)))
+        if column >= len(row):
+            raise StatsError(f"{path}:{i}: row has no column {name!r}")
+        values.append(parse_value(row[column], f"{path}:{i}, column {name!r}"))
+    return values, name
 
 
 def counts_from_rolls(rolls: Sequence[int], support: Sequence[int]) -> np.ndarray:

@@ -1,0 +1,147 @@
+"""``diefab roll``: tally the rolls of a made die by hand, in the terminal."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from diefab.cli.common import design_argument, get_design
+
+#: Width of the longest bar, in characters.
+BAR_WIDTH = 36
+
+
+@click.command()
+@design_argument
+@click.option("--target", default=None, help="Override the design's target distribution.")
+@click.option("--out", "out", type=click.Path(file_okay=False, path_type=Path), default=Path("."), show_default=True,
+              help="Folder of the roll log.")  # fmt: skip
+@click.option("--name", default=None, help="Name of the roll log, OUT/NAME.rolls.csv (default: the design's name).")
+@click.option("--delta", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.03, show_default=True,
+              help="Tolerance in TVD of the verdict: within it of the target, or off by at least it.")  # fmt: skip
+def roll(design, params, target, out, name, delta) -> None:
+    """Tally rolls of DESIGN by hand: one key per value, live counts and verdict.
+
+    Every roll is appended to the roll log at once, so a tally can be stopped
+    and resumed; `diefab stats --rolls` and `diefab calibrate` read the log.
+    One process at a time may write a log.
+    """
+    from diefab.core.errors import OutputError, StatsError
+    from diefab.core.files import ensure_dir, output_path
+    from diefab.stats.rolllog import read_log, repair_log
+    from diefab.stats.tally import Tally
+    from diefab.stats.verdict import sequential_line, target_label
+
+    try:
+        import textual  # noqa: F401
+        from filelock import FileLock, Timeout
+    except ImportError as exc:
+        raise StatsError(f"diefab roll needs {exc.name}: pip install 'diefab[tally]'") from None
+    d = get_design(design, params, target)
+    path = output_path(ensure_dir(out), name or d.name, ".rolls.csv")
+    lock = FileLock(str(path) + ".lock")
+    try:
+        lock.acquire(timeout=0)
+    except Timeout:
+        raise OutputError(f"another process is writing roll log {path}") from None
+    try:
+        if not (sys.stdin.isatty() and sys.stdout.isatty()):
+            raise StatsError("diefab roll needs a terminal (it reads one key per roll)")
+        repair_log(path)
+        tally = Tally(d.support, d.target_distribution.aligned(d.support), delta, read_log(path).values)
+        label = target_label(d.target)
+        app = roll_app(tally, path, f"{d.name} against {label}", label)
+        app.run()
+    finally:
+        lock.release()
+    click.echo(sequential_line(tally.result(), label))
+    click.echo(f"roll log: {path} ({tally.n} rolls)")
+
+
+def bars(tally, width: int = BAR_WIDTH):
+    """A rich table: value, key, count, observed and target frequency as bars."""
+    from rich.table import Table
+    from rich.text import Text
+
+    from diefab.dice.design import format_value
+
+    n = tally.n
+    observed = tally.counts / n if n else tally.counts * 0.0
+    top = max(float(tally.target.max()), float(observed.max()), 1e-12)
+    signed = min(tally.values) < 0
+    table = Table("key", "value", "count", "observed", "target", "observed \u2588 target \u2502", box=None)
+    for key, value, count, o, t in zip(tally.keys, tally.values, tally.counts, observed, tally.target):
+        bar = [" "] * (width + 1)
+        filled = int(round(o / top * width))
+        for i in range(filled):
+            bar[i] = "\u2588"
+        bar[int(round(t / top * width))] = "\u2502"
+        table.add_row(
+            f"[bold]{key}[/bold]", format_value(value, signed), str(int(count)), f"{o:.3f}", f"{t:.3f}",
+            Text("".join(bar), style="cyan"),
+        )  # fmt: skip
+    return table
+
+
+def roll_app(tally, path: Path, title: str, label: str):
+    """The textual app of a tally recorded in the roll log at `path`."""
+    from textual.app import App, ComposeResult
+    from textual.widgets import Footer, Static
+
+    from diefab.core.errors import DiefabError
+    from diefab.dice.design import format_value
+    from diefab.stats.rolllog import Roll, append_roll, remove_last_roll
+    from diefab.stats.tally import QUIT_KEYS, UNDO_KEYS
+    from diefab.stats.verdict import sequential_line
+
+    class RollApp(App):
+        """Hand tally: one key per value, undo, live counts and the verdict."""
+
+        CSS = "Static { padding: 0 1; } #verdict { text-style: bold; }"
+        TITLE = "diefab roll"
+
+        def __init__(self) -> None:
+            super().__init__()
+            self.tally, self.path, self.status = tally, path, "roll the die and press its value's key"
+
+        def compose(self) -> ComposeResult:
+            yield Static(f"{title}   log: {path}", id="title")
+            yield Static(id="table")
+            yield Static(id="verdict")
+            yield Static(id="status")
+            signed = min(tally.values) < 0
+            keys = "  ".join(f"{k}={format_value(v, signed)}" for k, v in zip(tally.keys, tally.values))
+            yield Static(f"keys: {keys}   undo: {'/'.join(UNDO_KEYS)}   quit: {'/'.join(QUIT_KEYS)}", id="keys")
+            yield Footer()
+
+        def on_mount(self) -> None:
+            self.refresh_view()
+
+        def refresh_view(self) -> None:
+            self.query_one("#table", Static).update(bars(self.tally))
+            self.query_one("#verdict", Static).update(sequential_line(self.tally.result(), label))
+            self.query_one("#status", Static).update(self.status)
+
+        def on_key(self, event) -> None:
+            done = self.tally.press(event.key)
+            try:
+                if done.kind == "roll":
+                    append_roll(self.path, Roll.now(done.value))
+                    self.status = f"rolled {done.value} ({self.tally.n} rolls)"
+                elif done.kind == "undo":
+                    remove_last_roll(self.path)
+                    self.status = f"undid {done.value} ({self.tally.n} rolls)"
+                elif done.kind == "quit":
+                    self.exit()
+                    return
+                else:
+                    return
+            except DiefabError as exc:
+                self.tally.revert(done)
+                self.status = f"not recorded: {exc}"
+            event.stop()
+            self.refresh_view()
+
+    return RollApp()

@@ -1,0 +1,151 @@
+"""Hand tally and roll logs: keys to state, durable appends and undo, the terminal app, the commands."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+
+import numpy as np
+import pytest
+
+from diefab.core.errors import StatsError
+from diefab.dice.targets import parse_target
+from diefab.stats.goodness import read_roll_column
+from diefab.stats.rolllog import HEADER, Roll, append_roll, read_log, remove_last_roll, repair_log
+from diefab.stats.tally import Tally, value_keys
+
+FOUR_DF = parse_target("4df")
+
+
+def test_keys_are_the_values_for_digits_else_in_order():
+    assert value_keys(range(1, 7)) == list("123456")
+    assert value_keys(range(-4, 5)) == list("123456789")
+    assert "u" not in value_keys(range(30)) and "q" not in value_keys(range(30))
+    with pytest.raises(StatsError, match="keys"):
+        value_keys(range(100))
+
+
+def test_tally_state_machine_counts_undo_and_resume():
+    tally = Tally(FOUR_DF.values, FOUR_DF.probabilities, 0.05, rolls=[0, 0, 1])
+    assert tally.counts.tolist() == [0, 0, 0, 0, 2, 1, 0, 0, 0]
+    kinds = [tally.press(k).kind for k in ["9", "1", "backspace", "x", "u", "q"]]
+    assert kinds == ["roll", "roll", "undo", "ignored", "undo", "quit"]
+    assert tally.rolls == [0, 0, 1]
+    for _ in range(3):
+        tally.press("u")
+    assert tally.n == 0 and tally.press("u").kind == "ignored"
+    with pytest.raises(StatsError, match="not a value"):
+        Tally(FOUR_DF.values, FOUR_DF.probabilities, 0.05, rolls=[7])
+
+
+def test_tally_reaches_the_verdict_of_a_loaded_die():
+    tally = Tally([1, 2], [0.5, 0.5], 0.2)
+    for _ in range(40):
+        tally.press("2")
+    res = tally.result()
+    assert res.decision == "off" and res.tvd_low >= 0.2
+
+
+def test_log_round_trip_torn_line_and_undo(tmp_path):
+    path = tmp_path / "die.rolls.csv"
+    append_roll(path, Roll.now(-3))
+    append_roll(path, Roll("2026-05-01T18:03:11.250Z", 2, "f3", 0.998, 1412))
+    assert path.read_text().splitlines()[0] == ",".join(HEADER)
+    log = read_log(path)
+    assert log.values.tolist() == [-3, 2] and log.rolls[1].face == "f3" and log.rolls[1].frame == 1412
+    with open(path, "a") as f:
+        f.write("2026-05-01T18:03:12Z,1")  # a crash mid-line: never a roll
+    assert read_log(path).values.tolist() == [-3, 2] and read_log(path).torn
+    assert repair_log(path) > 0 and not read_log(path).torn
+    assert remove_last_roll(path).value == 2 and read_log(path).values.tolist() == [-3]
+
+
+def test_bad_log_cells_name_line_and_token(tmp_path):
+    path = tmp_path / "bad.csv"
+    path.write_text(",".join(HEADER) + "\n2026-05-01T00:00:00Z,1,,,\n2026-05-01T00:00:01Z,two,,,\n")
+    with pytest.raises(StatsError, match=r"bad.csv:3: 'two' is not a whole-number roll"):
+        read_log(path)
+    path.write_text(",".join(HEADER) + "\n2026-05-01T00:00:00Z,1,f1,1.5,\n")
+    with pytest.raises(StatsError, match=r":2: confidence '1.5' is outside"):
+        read_log(path)
+
+
+def test_spreadsheet_prefers_a_named_column_and_names_bad_tokens(tmp_path):
+    sheet = tmp_path / "sheet.csv"
+    sheet.write_text("Roll #,Die A,Die B,Result\n1,3,4,7\n2,1,x,3\n3,2,2,4\n")
+    values, column = read_roll_column(sheet)
+    assert values.tolist() == [7, 3, 4] and column == "Result"
+    sheet.write_text("Roll #,Die A,Die B,Total\n1,3,4,7\n2,1,2,three\n")
+    with pytest.raises(StatsError, match=r"sheet.csv:3, column 'Total': 'three'"):
+        read_roll_column(sheet)
+    plain = tmp_path / "plain.txt"
+    plain.write_text("1 2 3  # first session\n4,5\n")
+    assert read_roll_column(plain) == (pytest.approx(np.array([1, 2, 3, 4, 5])), None)
+
+
+def test_stats_reads_a_roll_log_and_gives_the_sequential_verdict(run, tmp_path):
+    path = tmp_path / "gem.rolls.csv"
+    rng = np.random.default_rng(5)
+    for v in rng.choice(FOUR_DF.values, size=300, p=FOUR_DF.probabilities):
+        append_roll(path, Roll.now(int(v)))
+    code, out, _ = run("stats", "--rolls", path, "--target", "4df", "--sequential", "--delta", "0.03", "--json")
+    data = json.loads(out)
+    assert code == 0 and data["n"] == 300 and data["decision"] == "undecided" and data["more_rolls"] > 0
+    code, out, _ = run("stats", "--rolls", path, "--target", "4df")
+    assert code == 0 and "read column 'value'" in out and "verdict: indistinguishable from 4dF at 300 rolls" in out
+
+
+def test_stats_bad_token_is_one_line(bad, tmp_path):
+    sheet = tmp_path / "sheet.csv"
+    sheet.write_text("Roll #,Result\n1,7\n2,seven\n")
+    assert "sheet.csv:3, column 'Result': 'seven' is not a whole-number roll" in bad(
+        "stats", "--rolls", sheet, "--target", "2d6"
+    )
+
+
+def test_roll_refuses_a_second_process_and_needs_a_terminal(bad, tmp_path):
+    pytest.importorskip("textual")
+    from filelock import FileLock
+
+    lock = FileLock(str(tmp_path / "d6.rolls.csv") + ".lock")
+    with lock:
+        assert "another process" in bad("roll", "d6", "--out", tmp_path)
+    assert "needs a terminal" in bad("roll", "d6", "--out", tmp_path)
+
+
+def test_roll_app_records_every_key_in_the_log(tmp_path):
+    pytest.importorskip("textual")
+    from diefab.cli.roll import roll_app
+
+    path = tmp_path / "d6.rolls.csv"
+    repair_log(path)
+    t = parse_target("uniform:6")
+    tally = Tally(t.values, t.probabilities, 0.05)
+
+    async def drive():
+        app = roll_app(tally, path, "d6 against uniform:6", "a fair d6")
+        async with app.run_test(size=(110, 30)) as pilot:
+            await pilot.press("6", "6", "1", "backspace", "3")
+            await pilot.pause()
+            verdict = str(app.query_one("#verdict").render())
+            await pilot.press("q")
+        return verdict
+
+    verdict = asyncio.run(drive())
+    assert read_log(path).values.tolist() == [6, 6, 3]
+    assert tally.counts.tolist() == [0, 0, 1, 0, 0, 2]
+    assert "3 rolls" in verdict and "fair d6" in verdict
+    resumed = Tally(t.values, t.probabilities, 0.05, rolls=read_log(path).values)
+    assert resumed.counts.tolist() == tally.counts.tolist()
+
+
+def test_calibrate_reads_a_roll_log(tmp_path):
+    from diefab.dice.design import load_design
+    from diefab.search.calibrate import real_die
+
+    design = load_design("fudge-gem-paper")
+    path = tmp_path / "gem.rolls.csv"
+    for v in [-1, 0, 0, 2, -4]:
+        append_roll(path, Roll.now(v))
+    die = real_die(design.name, design, str(path))
+    assert die.n == 5 and die.counts.tolist() == [1, 0, 0, 1, 2, 0, 1, 0, 0]
