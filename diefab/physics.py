@@ -518,10 +518,9 @@ def dask_client(scheduler, timeout: float = 3.0):
     seconds (twice that at worst) with a :class:`PhysicsError`: nothing
     listening, a server that stays silent, or one that sends something else.
     """
-    try:
-        from distributed import Client
-    except ImportError as exc:
-        raise PhysicsError("--scheduler needs Dask: pip install 'dask[distributed]'") from exc
+    from .extras import require
+
+    Client = require("distributed", "dask", "--scheduler").Client
     if isinstance(scheduler, Client):
         return scheduler, False
     if not isinstance(scheduler, str) or not scheduler.strip():
@@ -675,9 +674,9 @@ def simulate(
 
     try:
         if scheduler is not None:
+            client, own = dask_client(scheduler)  # first: a missing Dask is one line naming the extra
             from distributed import as_completed
 
-            client, own = dask_client(scheduler)
             try:
                 futures = client.map(run_batch, [body] * len(batches), [settings] * len(batches), [seed] * len(batches),
                                      [a for a, _ in batches], [b for _, b in batches], pure=False)  # fmt: skip

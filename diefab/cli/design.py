@@ -168,16 +168,22 @@ def design(target, faces, family_name, model, budget, name, seed, size_mm, min_m
 def _print_report(d, report: dict, path: Path) -> None:
     from rich.table import Table
 
+    from ..design import format_value
+
     con = console()
     con.print(f"[bold]{d.name}[/bold]  family {d.family}  " + " ".join(f"{k}={v:.4g}" for k, v in d.params.items()))
     con.print(_METHOD[report["method"]])
-    table = Table("value", "faces", "predicted", "target")
+    table = Table("value", "rests on", "predicted", "target", title=f"Values, {report['model']} model",
+                  title_justify="left")  # fmt: skip
     faces_of: dict[int, list[str]] = {}
     for face, value in d.values.items():
         faces_of.setdefault(value, []).append(face)
     for v in d.support:
         table.add_row(
-            str(v), " ".join(faces_of[v]), f"{report['predicted'][str(v)]:.4f}", f"{report['target'][str(v)]:.4f}"
+            format_value(v, min(d.support) < 0),
+            " ".join(faces_of[v]),
+            f"{report['predicted'][str(v)]:.4f}",
+            f"{report['target'][str(v)]:.4f}",
         )
     con.print(table)
     con.print(f"Eq. (2) {report['objective']:.5f}, TVD {report['tvd']:.4f} under the {report['model']} model")
