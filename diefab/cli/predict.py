@@ -46,10 +46,9 @@ def templates(as_json: bool) -> None:
 def predict(design: str, params, model: str, target: str | None, as_json: bool, **fill) -> None:
     """Landing probabilities, centre of mass and stability margins of DESIGN."""
 
+    from ..model_choice import best_model
     from ..models import face_probabilities, to_values
     from ..stats import jsd, pearson_divergence, tvd
-
-    from ..model_choice import best_model
 
     d = apply_fill(get_design(design, params, target), **pop_fill(fill))
     choice = best_model(d) if model == "auto" else None
