@@ -729,10 +729,13 @@ def simulate(
 # the chart
 
 
-def plot_validation(design: Design, result: RollResult, *, fmt: str = "png", alpha: float = 0.05) -> bytes:
-    """Bar chart of simulated value probabilities (with simultaneous CIs), target and solid-angle model.
+def plot_validation(design: Design, result: RollResult, *, fmt: str = "png", alpha: float = 0.05,
+                    model: str | None = None) -> bytes:  # fmt: skip
+    """Bar chart of simulated value probabilities (with simultaneous CIs), target and a landing model.
 
     Returns the image as bytes (`fmt` ``png`` or ``svg``); the caller writes it.
+    `model` is a key of :data:`diefab.models.MODELS` (default: the one to trust
+    for the die, :func:`diefab.model_choice.best_model`).
     """
     import io
 
@@ -751,7 +754,10 @@ def plot_validation(design: Design, result: RollResult, *, fmt: str = "png", alp
     sim = counts / max(counts.sum(), 1)
     ci = goodman_intervals(counts, alpha) if counts.sum() else np.zeros((len(values), 2))
     target = design.target_distribution.aligned(values)
-    model = value_probabilities(design, "solid-angle")
+    from .model_choice import best_model
+
+    name = model or best_model(design).name
+    model = value_probabilities(design, name)
     x = np.arange(len(values))
     fig = Figure(figsize=(7.5, 4.2), dpi=120)
     ax = fig.add_subplot()
@@ -759,7 +765,7 @@ def plot_validation(design: Design, result: RollResult, *, fmt: str = "png", alp
     ax.bar(x - w, sim, w, yerr=[sim - ci[:, 0], ci[:, 1] - sim], capsize=3, color="#3b75af",
            label=f"simulated ({result.landed} drops, {1 - alpha:.0%} simultaneous CI)")  # fmt: skip
     ax.bar(x, target, w, color="#9e9e9e", label=f"target {design.target}")
-    ax.bar(x + w, model, w, color="#e5a04b", label="solid-angle model")
+    ax.bar(x + w, model, w, color="#e5a04b", label=f"{name} model")
     from .design import format_value
 
     ax.set_xticks(x, [format_value(int(v), min(values) < 0) for v in values])

@@ -58,6 +58,7 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
 
     from ..errors import PhysicsError
     from ..files import atomic_write, check_outputs, ensure_dir
+    from ..model_choice import best_model
     from ..models import value_probabilities
     from ..physics import SimulationInterrupted, plot_validation, simulate
     from ..stats import goodness_of_fit
@@ -98,7 +99,9 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
     counts = result.value_counts(d)
     goal = d.target_distribution.aligned(d.support)
     fit = goodness_of_fit(counts, goal, seed=seed)
+    choice = best_model(d)
     model = value_probabilities(d, "solid-angle")
+    predicted = model if choice.name == "solid-angle" else value_probabilities(d, choice.name)
     keys = [str(v) for v in d.support]
     # values the target never rolls, rolled: counted and reported (they reject the target outright)
     unexpected = {k: int(c) for k, c, g in zip(keys, counts, goal) if g == 0 and c > 0}
@@ -115,6 +118,8 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
         "intervals": {k: [float(lo), float(hi)] for k, (lo, hi) in zip(keys, fit.intervals)},
         "target_probabilities": values_dict(d, goal),
         "solid_angle": values_dict(d, model),
+        "model": choice.name,
+        "predicted": values_dict(d, predicted),
         "cocked": result.cocked,
         "unsettled": result.unsettled,
         "zero_weight_rolls": unexpected,
@@ -134,7 +139,7 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
         "settings": settings.as_dict(),
     }
     if plot_file is not None:
-        atomic_write(plot_file, plot_validation(d, result, fmt=plot_file.suffix.lower()[1:]),
+        atomic_write(plot_file, plot_validation(d, result, fmt=plot_file.suffix.lower()[1:], model=choice.name),
                      inputs=design_inputs(design, d))  # fmt: skip
     if as_json:
         emit_json(out)
@@ -143,12 +148,14 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
 
     con = console()
     con.print(heading(d, fill=d.fill.kind, target=d.target))
-    table = Table("value", "count", "simulated", "95% simultaneous CI", "target", "solid angle")
+    table = Table("value", "count", "simulated", "95% simultaneous CI", "target", f"{choice.name} model",
+                  title=f"Values: {result.n} pybullet drops against the target and the {choice.name} model",
+                  title_justify="left")  # fmt: skip
     signed = min(d.support) < 0
     for k, v in enumerate(d.support):
         lo, hi = fit.intervals[k]
         table.add_row(format_value(v, signed), str(counts[k]), f"{fit.observed[k]:.4f}", f"[{lo:.4f}, {hi:.4f}]",
-                      f"{goal[k]:.4f}", f"{model[k]:.4f}")  # fmt: skip
+                      f"{goal[k]:.4f}", f"{predicted[k]:.4f}")  # fmt: skip
     con.print(table)
     shown = [f"{n}={c}" for n, c in zip(result.faces, result.face_counts) if n in d.values]
     more = f"  ... ({len(shown) - 40} more; --json lists all)" if len(shown) > 40 else ""
@@ -190,7 +197,8 @@ def _sensitivity(d, base, sims, seed, workers, scheduler, as_json, overrides) ->
 
     con = console()
     con.print(heading(d, fill=d.fill.kind, target=d.target))
-    table = Table("profile", "TVD to target", "expected (noise)", "chi2 p", "cocked", "unsettled", "seconds")
+    table = Table("profile", "TVD to target", "expected (noise)", "chi2 p", "cocked", "unsettled", "seconds",
+                  title=f"pybullet simulation under each profile ({sims} drops each)", title_justify="left")
     for r in rows:
         table.add_row(r["profile"], f"{r['tvd']:.4f}", f"{r['expected_tvd']:.4f}", f"{r['p_value']:.3g}",
                       str(r["cocked"]), str(r["unsettled"]), f"{r['seconds']:.1f}")  # fmt: skip
