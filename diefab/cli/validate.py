@@ -37,6 +37,8 @@ from .common import (
 @click.option("--scheduler", default=None, metavar="ADDRESS", help="Run on this Dask scheduler (tcp://host:8786).")
 @click.option("--plot", "plot_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Write a bar chart to FILE (.png or .svg).")  # fmt: skip
+@click.option("--report", "report_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Write one self-contained HTML page to FILE: the die, its net, the distribution, the verdict.")
 @fill_options("paper", "print")
 @click.option("--target", default=None, help="Override the design's target distribution.")
 @click.option("--sensitivity", is_flag=True,
@@ -46,8 +48,8 @@ from .common import (
 @physics_options
 @json_option
 @click.pass_context
-def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, target, sensitivity, physics_profile,
-             as_json, **physics) -> None:  # fmt: skip
+def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, report_file, target, sensitivity,
+             physics_profile, as_json, **physics) -> None:  # fmt: skip
     """Drop DESIGN many times in pybullet and test the counts against its target.
 
     With --sensitivity, drop it under each standard throw and table instead
@@ -69,14 +71,20 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
     d = apply_fill(get_design(design, params, target), **fill)
     settings = physics_settings(d, physics_profile, **physics)
     if sensitivity:
-        if plot_file is not None:
-            raise click.BadParameter("--plot draws one validation, not --sensitivity", param_hint="--plot")
+        if plot_file is not None or report_file is not None:
+            raise click.BadParameter("--plot and --report show one validation, not --sensitivity",
+                                     param_hint="--plot/--report")  # fmt: skip
         return _sensitivity(d, settings, sims, seed, workers, scheduler, as_json, physics)
     if plot_file is not None:
         if plot_file.suffix.lower() not in (".png", ".svg"):
             raise click.BadParameter(f"{plot_file} must end in .png or .svg", param_hint="--plot")
         ensure_dir(plot_file.parent)
         check_outputs([plot_file], design_inputs(design, d))
+    if report_file is not None:
+        if report_file.suffix.lower() not in (".html", ".htm"):
+            raise click.BadParameter(f"{report_file} must end in .html", param_hint="--report")
+        ensure_dir(report_file.parent)
+        check_outputs([report_file, *([plot_file] if plot_file else [])], design_inputs(design, d))
     bar = None
     if sys.stderr.isatty():
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
@@ -141,6 +149,8 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
     if plot_file is not None:
         atomic_write(plot_file, plot_validation(d, result, fmt=plot_file.suffix.lower()[1:], model=choice.name),
                      inputs=design_inputs(design, d))  # fmt: skip
+    if report_file is not None:
+        _write_report(report_file, d, design, fit, result, _verdict(d, fit, result.landed), settings)
     if as_json:
         emit_json(out)
         return
@@ -170,8 +180,33 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
     con.print(f"chi2 = {fit.chi2:.3f} (df {fit.df}), p = {fit.p_value:.4g} (Monte-Carlo {fit.p_value_mc:.4g})")
     con.print(f"TVD = {fit.tvd:.4f} (expected under the target {fit.expected_tvd:.4f})   "
               f"JSD = {fit.jsd:.5f} (expected {fit.expected_jsd:.5f})")  # fmt: skip
-    if plot_file is not None:
-        con.print(f"wrote {plot_file}")
+    for written in (plot_file, report_file):
+        if written is not None:
+            con.print(f"wrote {written}")
+
+
+def _verdict(d, fit, landed: int) -> str:
+    """The report's verdict: how far the counts are from the target, and whether the drops tell them apart."""
+    told = fit.p_value < 0.05
+    words = f"distinguishable from {d.target} (p = {fit.p_value:.3g})" if told else (
+        f"not distinguishable from {d.target} (p = {fit.p_value:.3g})")  # fmt: skip
+    return f"rolls within TVD {fit.tvd:.3f} of {d.target}; {words} at {landed:,} drops"
+
+
+def _write_report(path, d, spec, fit, result, verdict, settings) -> None:
+    from ..files import atomic_write
+    from ..report import DieReport, die_pictures, render_report
+
+    report = DieReport(
+        design=d, title=f"diefab validate {d.name}", verdict=verdict, probabilities=fit.observed,
+        intervals=np.asarray(fit.intervals), source=f"{result.landed} pybullet drops",
+        lines=[f"{result.n} drops: {result.landed} on a face, {result.cocked} cocked, {result.unsettled} unsettled",
+               f"chi2 = {fit.chi2:.3f} (df {fit.df}), p = {fit.p_value:.4g}; TVD {fit.tvd:.4f} (expected under "
+               f"the target {fit.expected_tvd:.4f})",
+               "physics: " + ", ".join(f"{k}={v}" for k, v in settings.as_dict().items())],
+        pictures=die_pictures(d),
+    )  # fmt: skip
+    atomic_write(path, render_report(report).encode("utf-8"), inputs=design_inputs(spec, d))
 
 
 def _sensitivity(d, base, sims, seed, workers, scheduler, as_json, overrides) -> None:
