@@ -75,25 +75,37 @@ def _close(line: str, want: list[float]) -> bool:
     return all(abs(g - w) <= max(0.02, 0.15 * abs(w)) for g, w in zip(got, want))
 
 
+def _is_slow(command: str) -> bool:
+    """A command that simulates for minutes, or reads a file that such a command wrote (``out/...``)."""
+    return command.split()[1] in SLOW or " out/" in command
+
+
 def _pages_with_commands():
+    """Per page: its quick commands (run in the quick suite), then all of them in order (slow)."""
     for page in PAGES:
         blocks = console_blocks(page)
-        if not blocks:
-            continue
-        slow = any(c.split()[1] in SLOW for c, _ in blocks)
-        yield pytest.param(page, blocks, id=str(page.relative_to(ROOT)), marks=[pytest.mark.slow] if slow else [])
+        name = str(page.relative_to(ROOT))
+        quick = [b for b in blocks if not _is_slow(b[0])]
+        if quick:
+            yield pytest.param(page, quick, id=f"{name}-quick")
+        if len(quick) < len(blocks):
+            yield pytest.param(page, blocks, id=f"{name}-all", marks=pytest.mark.slow)
 
 
-@pytest.mark.parametrize(("page", "blocks"), list(_pages_with_commands()))
-def test_every_command_shown_runs_and_prints_what_the_docs_quote(page, blocks, tmp_path):
+def _run_shown(blocks, cwd: Path) -> None:
     env = {**os.environ, "PYTHONPATH": str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", "")}
     env.pop("COLUMNS", None)
     for command, quoted in blocks:
         args = command.split()[1:]
-        proc = subprocess.run([sys.executable, "-m", "diefab", *args], cwd=tmp_path, env=env, capture_output=True,
+        proc = subprocess.run([sys.executable, "-m", "diefab", *args], cwd=cwd, env=env, capture_output=True,
                               text=True, encoding="utf-8", timeout=1800)  # fmt: skip
         assert proc.returncode == 0, f"{command} exited {proc.returncode}: {proc.stderr}"
         check_quoted(quoted, proc.stdout, simulated=args[0] in SIMULATING)
+
+
+@pytest.mark.parametrize(("page", "blocks"), list(_pages_with_commands()))
+def test_every_command_shown_runs_and_prints_what_the_docs_quote(page, blocks, tmp_path):
+    _run_shown(blocks, tmp_path)
 
 
 def test_the_docs_show_commands():
