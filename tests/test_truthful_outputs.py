@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from diefab import design_to_toml, load_design, parse_design
-from diefab.errors import MissingExtraError
-from diefab.extras import require
-from diefab.model_choice import best_model
+from diefab.core.errors import MissingExtraError
+from diefab.core.extras import require
+from diefab.models.choice import best_model
 
 
 def test_best_model_is_fast_for_rigid_drops_and_basins_under_capture():

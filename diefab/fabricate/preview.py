@@ -13,8 +13,8 @@ import io
 
 import numpy as np
 
-from .labels import design_axis, reading_note
-from .stl import Solid
+from diefab.fabricate.stl import Solid
+from diefab.made.labels import design_axis, reading_note
 
 __all__ = ["render_preview"]
 
@@ -60,7 +60,7 @@ def _draw(ax, solid: Solid, right: np.ndarray, up: np.ndarray, d: np.ndarray, ti
 
 def _label_title(design, label) -> str:
     """``label on f8: +3 (rests on f1)``: the face carrying the text, and the face the die rests on to show it."""
-    from ..design import format_value
+    from diefab.dice.design import format_value
 
     signed = min(design.support) < 0
     shows = [rest for rest, up in design.label_face.items()
