@@ -558,11 +558,11 @@ def design_to_toml(design: Design, *, comment: str = "") -> str:
         data["description"] = design.description
     data["family"] = design.family
     data["target"] = design.target
-    data["size_mm"] = _number(design.size_mm)
+    data["size_mm"] = _toml_number(design.size_mm)
     if design.params:
-        data["params"] = {k: _number(v) for k, v in design.params.items()}
+        data["params"] = {k: _toml_number(v) for k, v in design.params.items()}
     if design.vertices is not None:
-        data["vertices"] = [list(map(_number, v)) for v in design.vertices]
+        data["vertices"] = [list(map(_toml_number, v)) for v in design.vertices]
     if design.faces is not None:
         data["faces"] = [list(map(int, f)) for f in design.faces]
     if design.mesh is not None:
@@ -571,11 +571,11 @@ def design_to_toml(design: Design, *, comment: str = "") -> str:
     if design.transitional:
         data["transitional"] = list(design.transitional)
     if design.merge_tolerance_mm is not None:
-        data["merge_tolerance_mm"] = _number(design.merge_tolerance_mm)
+        data["merge_tolerance_mm"] = _toml_number(design.merge_tolerance_mm)
     if design.center_of_mass is not None:
-        data["center_of_mass"] = [_number(x) for x in design.center_of_mass]
+        data["center_of_mass"] = [_toml_number(x) for x in design.center_of_mass]
     if design.inertia is not None:
-        data["inertia"] = [[_number(x) for x in r] for r in design.inertia]
+        data["inertia"] = [[_toml_number(x) for x in r] for r in design.inertia]
     if design.labels:
         data["labels"] = dict(design.labels)
     data["fill"] = _whole(design.fill.to_mapping())
@@ -585,10 +585,10 @@ def design_to_toml(design: Design, *, comment: str = "") -> str:
     return header + tomli_w.dumps(data)
 
 
-def _number(x: float) -> int | float:
+def _toml_number(x: float) -> int | float:
     """A whole number as an int (``n = 12``, not ``12.0``), any other as a float.
 
-    >>> _number(12.0), _number(0.5)
+    >>> _toml_number(12.0), _toml_number(0.5)
     (12, 0.5)
     """
     x = float(x)
@@ -597,4 +597,4 @@ def _number(x: float) -> int | float:
 
 def _whole(table: dict) -> dict:
     """`table` with its whole float values written as ints (booleans and strings untouched)."""
-    return {k: _number(v) if isinstance(v, float) else v for k, v in table.items()}
+    return {k: _toml_number(v) if isinstance(v, float) else v for k, v in table.items()}
