@@ -100,3 +100,27 @@ def test_validate_report_is_one_offline_page(run, tmp_path):
 
 def test_report_refuses_a_file_that_is_not_html(bad, tmp_path):
     assert "--report" in bad("validate", "d6", "--sims", "10", "--report", tmp_path / "r.txt")
+
+
+def test_a_spreadsheet_roll_log_is_read_from_its_result_column(tmp_path, run):
+    from diefab.stats.goodness import read_roll_log
+
+    sheet = tmp_path / "rolls.csv"
+    sheet.write_text("Roll #,Die A,Die B,Result\n1,2,3,5\n2,1,1,2\n3,6,6,12\n# a pause\n4,3,4,7\n")
+    rolls, column = read_roll_log(sheet)
+    assert rolls.tolist() == [5, 2, 12, 7] and column == "Result"
+    totals = tmp_path / "totals.csv"
+    totals.write_text("Throw,Total\n1,7\n2,8\n")
+    assert read_roll_log(totals)[1] == "Total"
+    plain = tmp_path / "plain.txt"
+    plain.write_text("1 2 3  # the first three\n4\n")
+    assert read_roll_log(plain)[0].tolist() == [1, 2, 3, 4] and read_roll_log(plain)[1] is None
+    code, _, err = run("stats", "--rolls", sheet, "--target", "2d6")
+    assert code == 0 and "column 'Result'" in err
+
+
+def test_a_bad_roll_is_named_with_its_line(tmp_path, bad):
+    log = tmp_path / "rolls.csv"
+    log.write_text("value\n1\n2\nx3\n")
+    line = bad("stats", "--rolls", log, "--target", "1d6")
+    assert "rolls.csv:4" in line and "'x3'" in line

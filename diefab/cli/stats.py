@@ -31,7 +31,7 @@ def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, see
         counts_from_rolls,
         goodness_of_fit,
         parse_counts,
-        read_rolls,
+        read_roll_log,
         rolls_for_power,
     )
 
@@ -44,7 +44,10 @@ def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, see
             raise StatsError(f"{len(x)} counts for the {len(goal.values)} values of target {target!r}")
     else:
         goal = parse_target(target)
-        x = counts_from_rolls(read_rolls(rolls), goal.values)
+        log, column = read_roll_log(rolls)
+        if column is not None:
+            click.echo(f"diefab: note: read the rolls from column {column!r} of {rolls}", err=True)
+        x = counts_from_rolls(log, goal.values)
     fit = goodness_of_fit(x, goal.probabilities, alpha=alpha, seed=seed)
     observed = fit.observed
     power_n = rolls_for_power(goal.probabilities, observed, method="monte-carlo", seed=seed)

@@ -40,6 +40,7 @@ __all__ = [
     "jsd",
     "parse_counts",
     "pearson_divergence",
+    "read_roll_log",
     "read_rolls",
     "rolls_for_power",
     "tvd",
@@ -400,7 +401,7 @@ def _short(text: str, width: int = 40) -> str:
     return text if len(text) <= width else text[: width - 3] + "..."
 
 
-_HEADER_NAMES = ("value", "roll", "result", "outcome", "face")
+_HEADER_NAMES = ("value", "roll", "result", "outcome", "face", "total")
 
 
 def _parse_value(token: str, where: str) -> int:
@@ -413,17 +414,32 @@ def _parse_value(token: str, where: str) -> int:
 
 
 def read_rolls(path: str | Path) -> np.ndarray:
-    """Rolled values from a text or CSV log.
-
-    Accepted: values separated by commas, spaces, semicolons or newlines;
-    ``#`` comments; or a CSV file with a header naming a column ``value``,
-    ``roll``, ``result``, ``outcome`` or ``face``.  ``+2`` and ``−3`` (true
-    minus) are read as numbers.
+    """Rolled values from a text or CSV log (:func:`read_roll_log` without the column read).
 
     Returns
     -------
     (n,) int
         The rolls in order.
+    """
+    return read_roll_log(path)[0]
+
+
+def read_roll_log(path: str | Path) -> tuple[np.ndarray, str | None]:
+    """Rolled values from a text or CSV log, and the CSV column they were read from.
+
+    Accepted: values separated by commas, spaces, semicolons or newlines;
+    ``#`` comments; or a CSV file whose header names a column ``value``,
+    ``roll``, ``result``, ``outcome``, ``face`` or ``total`` exactly (any
+    case; the first of these names in that order wins, so ``Roll #`` is not
+    ``roll``).  ``+2`` and ``−3`` (true minus) are read as numbers.  A token
+    that is not a roll is named with its line.
+
+    Returns
+    -------
+    rolls : (n,) int
+        The rolls in order.
+    column : str or None
+        The header of the column read (None: a plain list of values).
     """
     path = Path(path)
     if path.exists() and not path.is_file():
@@ -434,11 +450,16 @@ def read_rolls(path: str | Path) -> np.ndarray:
         text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
         raise StatsError(f"cannot read roll log {path}: {exc}") from exc
-    lines = [(i + 1, line.split("#", 1)[0]) for i, line in enumerate(text.splitlines())]
+    # whole-line comments anywhere; inline ones only in a plain list (a CSV header may say "Roll #")
+    lines = [(i + 1, line) for i, line in enumerate(text.splitlines()) if not line.lstrip().startswith("#")]
     lines = [(i, line) for i, line in lines if line.strip()]
+    if lines and not re.search(r"[A-Za-z]", lines[0][1].split("#", 1)[0]):
+        lines = [(i, line.split("#", 1)[0]) for i, line in lines]
+        lines = [(i, line) for i, line in lines if line.strip()]
     if not lines:
         raise StatsError(f"roll log {path} is empty")
     rolls: list[int] = []
+    read_from = None
     first = lines[0][1]
     if re.search(r"[A-Za-z]", first):
         header = next(csv.reader(io.StringIO(first)))
@@ -448,6 +469,7 @@ def read_rolls(path: str | Path) -> np.ndarray:
             raise StatsError(
                 f"{path}:{lines[0][0]}: header {first.strip()!r} names no column {'/'.join(_HEADER_NAMES)}"
             )
+        read_from = header[column].strip()
         for i, line in lines[1:]:
             row = next(csv.reader(io.StringIO(line)))
             if column >= len(row):
@@ -458,7 +480,7 @@ def read_rolls(path: str | Path) -> np.ndarray:
             rolls.extend(_parse_value(t, f"{path}:{i}") for t in re.split(r"[,\s;]+", line.strip()) if t)
     if not rolls:
         raise StatsError(f"roll log {path} has no rolls")
-    return np.array(rolls, dtype=np.int64)
+    return np.array(rolls, dtype=np.int64), read_from
 
 
 def counts_from_rolls(rolls: Sequence[int], support: Sequence[int]) -> np.ndarray:
