@@ -124,3 +124,14 @@ def test_a_bad_roll_is_named_with_its_line(tmp_path, bad):
     log.write_text("value\n1\n2\nx3\n")
     line = bad("stats", "--rolls", log, "--target", "1d6")
     assert "rolls.csv:4" in line and "'x3'" in line
+
+
+def test_design_report_is_one_offline_page(run, tmp_path):
+    page = tmp_path / "u6.html"
+    code, out, err = run("design", "uniform:6", "--model", "fast", "--validate-sims", "200", "--report", page,
+                         "--out", tmp_path)  # fmt: skip
+    assert code == 0, err
+    links = _Links()
+    links.feed(page.read_text(encoding="utf-8"))
+    assert len(links.sources) >= 3 and all(src.startswith("data:image/") for src in links.sources)
+    assert f"wrote {page}" in out

@@ -16,7 +16,7 @@ import numpy as np
 
 from diefab.dice.design import Design, format_value
 
-__all__ = ["DieReport", "die_pictures", "render_report"]
+__all__ = ["DieReport", "design_report", "die_pictures", "render_report"]
 
 
 @dataclass(frozen=True)
@@ -66,6 +66,29 @@ def die_pictures(design: Design) -> dict[str, tuple[bytes, str]]:
         "the die, printed (diefab stl --preview)": (render_preview(solid, dpi=70), "image/png"),
         "the die, in paper (diefab net)": (svg, "image/svg+xml"),
     }
+
+
+def design_report(design: Design, predicted: np.ndarray, model: str, validated: dict | None) -> DieReport:
+    """The report of a designed die: its predicted distribution under `model` and its check by simulation.
+
+    Parameters
+    ----------
+    design : Design
+    predicted : (k,) float
+        Probability of each value of ``design.support`` under `model`.
+    model : str
+        The model the design was optimized under.
+    validated : dict or None
+        The check by simulation: ``n``, ``seed``, ``tvd``, ``p_value`` (None: not checked).
+    """
+    if validated:
+        verdict = (f"checked by {validated['n']:,} pybullet drops on a fresh seed ({validated['seed']}): TVD "
+                   f"{validated['tvd']:.4f} to {design.target}, p = {validated['p_value']:.3g}")  # fmt: skip
+    else:
+        verdict = f"not checked by simulation; predicted under the {model} model only"
+    return DieReport(design=design, title=f"diefab design {design.target}: {design.name}", verdict=verdict,
+                     probabilities=np.asarray(predicted, dtype=float), intervals=None, source=f"{model} model",
+                     pictures=die_pictures(design))  # fmt: skip
 
 
 def _distribution_png(report: DieReport) -> bytes:
