@@ -72,11 +72,12 @@ def check_quoted(quoted: list[str], actual: str, simulated: bool) -> None:
 def _close(line: str, want: list[float]) -> bool:
     """The numbers of `line` within 0.02 or 15 % of `want` (Monte-Carlo figures at the docs' sample sizes).
 
-    A p-value (a number after ``p =`` or ``Monte-Carlo``) swings over its whole range between samples of a die that is near
-    the target, so it is only checked to be a probability.
+    A p-value (a number after ``p =`` or ``Monte-Carlo``) swings over its whole range between samples of a
+    die that is near the target, so it is only checked to be a probability.
     """
     got = [_value(t) for t in NUMBER.findall(line)]
-    pvalues = {k for k, m in enumerate(NUMBER.finditer(line)) if line[: m.start()].rstrip().endswith(("p =", "Monte-Carlo"))}
+    before = [line[: m.start()].rstrip() for m in NUMBER.finditer(line)]
+    pvalues = {k for k, text in enumerate(before) if text.endswith(("p =", "Monte-Carlo"))}
     return all((0 <= g <= 1) if k in pvalues else abs(g - w) <= max(0.02, 0.15 * abs(w))
                for k, (g, w) in enumerate(zip(got, want)))  # fmt: skip
 
