@@ -91,8 +91,8 @@ def test_stats_reads_a_roll_log_and_gives_the_sequential_verdict(run, tmp_path):
     code, out, _ = run("stats", "--rolls", path, "--target", "4df", "--sequential", "--delta", "0.03", "--json")
     data = json.loads(out)
     assert code == 0 and data["n"] == 300 and data["decision"] == "undecided" and data["more_rolls"] > 0
-    code, out, _ = run("stats", "--rolls", path, "--target", "4df")
-    assert code == 0 and "read column 'value'" in out and "verdict: indistinguishable from 4dF at 300 rolls" in out
+    code, out, err = run("stats", "--rolls", path, "--target", "4df")
+    assert code == 0 and "read column 'value'" in err and "verdict: indistinguishable from 4dF at 300 rolls" in out
 
 
 def test_stats_bad_token_is_one_line(bad, tmp_path):

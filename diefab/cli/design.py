@@ -57,9 +57,16 @@ def _slug(text: str) -> str:
               help="Refine and check against every standard throw and table (the shipped profiles soft-tray, "
               "wooden-table, hard-tray, low-spin, high-spin; each over --physics), judged by the worst.")  # fmt: skip
 @out_option
+@click.option(
+    "--report",
+    "report_file",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help="Also write one self-contained HTML page to FILE: the die, its net, its distribution, its check.",
+)
 @json_option
 def design(target, faces, family_name, model, budget, name, seed, size_mm, min_margin, validate_sims, workers,
-           physics_profile, robust, out_dir, as_json, fill_kind, **fill_settings) -> None:  # fmt: skip
+           physics_profile, robust, out_dir, report_file, as_json, fill_kind, **fill_settings) -> None:  # fmt: skip
     """Design a die that rolls like TARGET (2d6, 3dF, binomial:4, uniform:3, 1:3,2:3,...).
 
     Picks a family and face count that can carry the target's values,
@@ -82,6 +89,8 @@ def design(target, faces, family_name, model, budget, name, seed, size_mm, min_m
     from diefab.stats.goodness import goodness_of_fit, pearson_divergence, tvd
 
     t0 = time.monotonic()
+    if report_file is not None and report_file.suffix.lower() not in (".html", ".htm"):
+        raise click.BadParameter(f"{report_file} must end in .html", param_hint="--report")
     goal = parse_target(target)
     check_fill_options(fill_kind or "solid", fill_settings)
     changes = {FILL_OPTIONS[k][0]: v for k, v in fill_settings.items() if v is not None}
@@ -159,25 +168,38 @@ def design(target, faces, family_name, model, budget, name, seed, size_mm, min_m
         "refinement": found.steps,
         "seconds": time.monotonic() - t0,
     }
+    if report_file is not None:
+        from diefab.fabricate.report import design_report, render_report
+
+        page = render_report(design_report(d, found.predicted, found.model, validated))
+        report["report"] = str(atomic_write(report_file, page.encode("utf-8"), inputs=[path]))
     if as_json:
         emit_json(report)
         return
     _print_report(d, report, path)
+    if report_file is not None:
+        console().print(f"wrote {report['report']}")
 
 
 def _print_report(d, report: dict, path: Path) -> None:
     from rich.table import Table
 
+    from diefab.dice.design import format_value
+
     con = console()
     con.print(f"[bold]{d.name}[/bold]  family {d.family}  " + " ".join(f"{k}={v:.4g}" for k, v in d.params.items()))
     con.print(_METHOD[report["method"]])
-    table = Table("value", "faces", "predicted", "target")
+    table = Table("value", "rests on", "predicted", "target", title=f"Values, {report['model']} model",
+                  title_justify="left")  # fmt: skip
     faces_of: dict[int, list[str]] = {}
     for face, value in d.values.items():
         faces_of.setdefault(value, []).append(face)
     for v in d.support:
         table.add_row(
-            str(v), " ".join(faces_of[v]), f"{report['predicted'][str(v)]:.4f}", f"{report['target'][str(v)]:.4f}"
+            format_value(v, min(d.support) < 0),
+            " ".join(faces_of[v]),
+            f"{report['predicted'][str(v)]:.4f}",
+            f"{report['target'][str(v)]:.4f}",
         )
     con.print(table)
     con.print(f"Eq. (2) {report['objective']:.5f}, TVD {report['tvd']:.4f} under the {report['model']} model")

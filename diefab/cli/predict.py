@@ -17,7 +17,7 @@ from diefab.cli.common import (
     pop_fill,
     values_dict,
 )
-from diefab.dice.design import format_value
+from diefab.dice.design import format_value, signed_number
 
 
 @click.command()
@@ -37,18 +37,22 @@ def templates(as_json: bool) -> None:
 
 @click.command()
 @design_argument
-@click.option("--model", default="solid-angle", show_default=True,
-              help="Landing model: solid-angle, basins (quasi-static) or fast.")  # fmt: skip
+@click.option("--model", default="auto", show_default=True,
+              help="Landing model: fast, basins (quasi-static) or solid-angle (the paper's); auto: the one to trust "
+              "for this die (fast, or basins where the design's physics is quasi-static).")  # fmt: skip
 @fill_options("paper", "print")
 @click.option("--target", default=None, help="Override the design's target distribution.")
 @json_option
 def predict(design: str, params, model: str, target: str | None, as_json: bool, **fill) -> None:
     """Landing probabilities, centre of mass and stability margins of DESIGN."""
 
+    from diefab.models.choice import best_model
     from diefab.models.probabilities import face_probabilities, to_values
     from diefab.stats.goodness import jsd, pearson_divergence, tvd
 
     d = apply_fill(get_design(design, params, target), **pop_fill(fill))
+    choice = best_model(d) if model == "auto" else None
+    model = choice.name if choice is not None else model
     fill_model = d.fill
     d.check_stable(0.0, fill_model)
     note_fast_fill(d, model, fill_model.kind)
@@ -74,6 +78,7 @@ def predict(design: str, params, model: str, target: str | None, as_json: bool, 
     result = {
         "design": d.name,
         "model": model,
+        **({"model_reason": choice.reason} if choice is not None else {}),
         "fill": fill_model.kind,
         "params": dict(d.params),
         "target": d.target,
@@ -108,8 +113,11 @@ def predict(design: str, params, model: str, target: str | None, as_json: bool, 
 
     con = console()
     con.print(heading(d, model=model, fill=fill_model.kind))
+    if choice is not None:
+        con.print(f"model: {model} ({choice.reason}; --model chooses another)")
     con.print(f"centre of mass: ({com[0]:.4f}, {com[1]:.4f}, {com[2]:.4f})  model units")
-    table = Table("face", "value", "label on", "probability", "margin")
+    table = Table("rests on", "value", "label on", "probability", "margin",
+                  title=f"Resting faces, {model} model", title_justify="left")  # fmt: skip
     for f in result["faces"]:
         if not f["resting"]:
             continue
@@ -127,9 +135,10 @@ def predict(design: str, params, model: str, target: str | None, as_json: bool, 
         shown = "  ".join(f"{n}\u2192{rolls_to[n]}" for n in transitional[:40])
         more = f"  ... ({len(transitional) - 40} more; --json lists all)" if len(transitional) > 40 else ""
         con.print("  " + shown + more)
-    table = Table("value", "predicted", "target", "difference")
+    table = Table("value", "predicted", "target", "difference", title=f"Values, {model} model",
+                  title_justify="left")  # fmt: skip
     for v, p, q in zip(d.support, values, goal):
-        table.add_row(format_value(v, min(d.support) < 0), f"{p:.4f}", f"{q:.4f}", f"{p - q:+.4f}")
+        table.add_row(format_value(v, min(d.support) < 0), f"{p:.4f}", f"{q:.4f}", signed_number(p - q, 4))
     con.print(table)
     con.print(f"Eq. (2) objective {result['objective']:.5f}   TVD {result['tvd']:.4f}   JSD {result['jsd']:.5f}")
     if bound is not None:

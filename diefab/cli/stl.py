@@ -139,6 +139,7 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face
     )
     before = r["probabilities"]["rounded" if round_mm else "sharp"]
     signed = min(d.support) < 0
+    click.echo("solid-angle model of the solid as cut (the balance line below is the fast model's):")
     click.echo("value       " + " ".join(f"{format_value(int(v), signed):>8s}" for v in before))
     for key in ("sharp", "rounded", "engraved", "printed"):
         if key in r["probabilities"]:

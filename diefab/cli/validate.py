@@ -37,6 +37,13 @@ from diefab.dice.design import format_value
 @click.option("--scheduler", default=None, metavar="ADDRESS", help="Run on this Dask scheduler (tcp://host:8786).")
 @click.option("--plot", "plot_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Write a bar chart to FILE (.png or .svg).")  # fmt: skip
+@click.option(
+    "--report",
+    "report_file",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help="Write one self-contained HTML page to FILE: the die, its net, the distribution, the verdict.",
+)
 @fill_options("paper", "print")
 @click.option("--target", default=None, help="Override the design's target distribution.")
 @click.option("--delta", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.03, show_default=True,
@@ -48,7 +55,7 @@ from diefab.dice.design import format_value
 @physics_options
 @json_option
 @click.pass_context
-def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, target, delta, sensitivity,
+def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, report_file, target, delta, sensitivity,
              physics_profile, as_json, **physics) -> None:  # fmt: skip
     """Drop DESIGN many times in pybullet and test the counts against its target.
 
@@ -60,6 +67,7 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
 
     from diefab.core.errors import PhysicsError
     from diefab.core.files import atomic_write, check_outputs, ensure_dir
+    from diefab.models.choice import best_model
     from diefab.models.probabilities import value_probabilities
     from diefab.physics.simulate import SimulationInterrupted, plot_validation, simulate
     from diefab.stats.goodness import goodness_of_fit
@@ -72,14 +80,20 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
     d = apply_fill(get_design(design, params, target), **fill)
     settings = physics_settings(d, physics_profile, **physics)
     if sensitivity:
-        if plot_file is not None:
-            raise click.BadParameter("--plot draws one validation, not --sensitivity", param_hint="--plot")
+        if plot_file is not None or report_file is not None:
+            raise click.BadParameter("--plot and --report show one validation, not --sensitivity",
+                                     param_hint="--plot/--report")  # fmt: skip
         return _sensitivity(d, settings, sims, seed, workers, scheduler, as_json, physics)
     if plot_file is not None:
         if plot_file.suffix.lower() not in (".png", ".svg"):
             raise click.BadParameter(f"{plot_file} must end in .png or .svg", param_hint="--plot")
         ensure_dir(plot_file.parent)
         check_outputs([plot_file], design_inputs(design, d))
+    if report_file is not None:
+        if report_file.suffix.lower() not in (".html", ".htm"):
+            raise click.BadParameter(f"{report_file} must end in .html", param_hint="--report")
+        ensure_dir(report_file.parent)
+        check_outputs([report_file, *([plot_file] if plot_file else [])], design_inputs(design, d))
     bar = None
     if sys.stderr.isatty():
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
@@ -104,7 +118,9 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
     fit = goodness_of_fit(counts, goal, seed=seed)
     seq = sequential_counts(counts, goal, delta)
     said = verdict(counts, goal, target_label(d.target), p_value=fit.p_value, sequential=seq)
+    choice = best_model(d)
     model = value_probabilities(d, "solid-angle")
+    predicted = model if choice.name == "solid-angle" else value_probabilities(d, choice.name)
     keys = [str(v) for v in d.support]
     # values the target never rolls, rolled: counted and reported (they reject the target outright)
     unexpected = {k: int(c) for k, c, g in zip(keys, counts, goal) if g == 0 and c > 0}
@@ -121,6 +137,8 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
         "intervals": {k: [float(lo), float(hi)] for k, (lo, hi) in zip(keys, fit.intervals)},
         "target_probabilities": values_dict(d, goal),
         "solid_angle": values_dict(d, model),
+        "model": choice.name,
+        "predicted": values_dict(d, predicted),
         "cocked": result.cocked,
         "unsettled": result.unsettled,
         "zero_weight_rolls": unexpected,
@@ -142,8 +160,10 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
         "verdict": said.text,
     }
     if plot_file is not None:
-        atomic_write(plot_file, plot_validation(d, result, fmt=plot_file.suffix.lower()[1:]),
+        atomic_write(plot_file, plot_validation(d, result, fmt=plot_file.suffix.lower()[1:], model=choice.name),
                      inputs=design_inputs(design, d))  # fmt: skip
+    if report_file is not None:
+        _write_report(report_file, d, design, fit, result, said.text, settings)
     if as_json:
         emit_json(out)
         return
@@ -151,12 +171,14 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
 
     con = console()
     con.print(heading(d, fill=d.fill.kind, target=d.target))
-    table = Table("value", "count", "simulated", "95% simultaneous CI", "target", "solid angle")
+    table = Table("value", "count", "simulated", "95% simultaneous CI", "target", f"{choice.name} model",
+                  title=f"Values: {result.n} pybullet drops against the target and the {choice.name} model",
+                  title_justify="left")  # fmt: skip
     signed = min(d.support) < 0
     for k, v in enumerate(d.support):
         lo, hi = fit.intervals[k]
         table.add_row(format_value(v, signed), str(counts[k]), f"{fit.observed[k]:.4f}", f"[{lo:.4f}, {hi:.4f}]",
-                      f"{goal[k]:.4f}", f"{model[k]:.4f}")  # fmt: skip
+                      f"{goal[k]:.4f}", f"{predicted[k]:.4f}")  # fmt: skip
     con.print(table)
     shown = [f"{n}={c}" for n, c in zip(result.faces, result.face_counts) if n in d.values]
     more = f"  ... ({len(shown) - 40} more; --json lists all)" if len(shown) > 40 else ""
@@ -172,8 +194,25 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
     con.print(f"TVD = {fit.tvd:.4f} (expected under the target {fit.expected_tvd:.4f})   "
               f"JSD = {fit.jsd:.5f} (expected {fit.expected_jsd:.5f})")  # fmt: skip
     con.print(f"verdict: {said.text}")
-    if plot_file is not None:
-        con.print(f"wrote {plot_file}")
+    for written in (plot_file, report_file):
+        if written is not None:
+            con.print(f"wrote {written}")
+
+
+def _write_report(path, d, spec, fit, result, verdict, settings) -> None:
+    from diefab.core.files import atomic_write
+    from diefab.fabricate.report import DieReport, die_pictures, render_report
+
+    report = DieReport(
+        design=d, title=f"diefab validate {d.name}", verdict=verdict, probabilities=fit.observed,
+        intervals=np.asarray(fit.intervals), source=f"{result.landed} pybullet drops",
+        lines=[f"{result.n} drops: {result.landed} on a face, {result.cocked} cocked, {result.unsettled} unsettled",
+               f"chi2 = {fit.chi2:.3f} (df {fit.df}), p = {fit.p_value:.4g}; TVD {fit.tvd:.4f} (expected under "
+               f"the target {fit.expected_tvd:.4f})",
+               "physics: " + ", ".join(f"{k}={v}" for k, v in settings.as_dict().items())],
+        pictures=die_pictures(d),
+    )  # fmt: skip
+    atomic_write(path, render_report(report).encode("utf-8"), inputs=design_inputs(spec, d))
 
 
 def _sensitivity(d, base, sims, seed, workers, scheduler, as_json, overrides) -> None:
@@ -199,7 +238,17 @@ def _sensitivity(d, base, sims, seed, workers, scheduler, as_json, overrides) ->
 
     con = console()
     con.print(heading(d, fill=d.fill.kind, target=d.target))
-    table = Table("profile", "TVD to target", "expected (noise)", "chi2 p", "cocked", "unsettled", "seconds")
+    table = Table(
+        "profile",
+        "TVD to target",
+        "expected (noise)",
+        "chi2 p",
+        "cocked",
+        "unsettled",
+        "seconds",
+        title=f"pybullet simulation under each profile ({sims} drops each)",
+        title_justify="left",
+    )
     for r in rows:
         table.add_row(r["profile"], f"{r['tvd']:.4f}", f"{r['expected_tvd']:.4f}", f"{r['p_value']:.3g}",
                       str(r["cocked"]), str(r["unsettled"]), f"{r['seconds']:.1f}")  # fmt: skip

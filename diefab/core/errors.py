@@ -13,6 +13,7 @@ __all__ = [
     "DesignError",
     "FabricationError",
     "GeometryError",
+    "MissingExtraError",
     "OutputError",
     "PhysicsError",
     "StatsError",
@@ -50,3 +51,7 @@ class FabricationError(DiefabError, ValueError):
 
 class OutputError(DiefabError, OSError):
     """An output file or folder cannot be written."""
+
+
+class MissingExtraError(DiefabError, ImportError):
+    """An optional dependency is not installed; the message names the extra that brings it."""

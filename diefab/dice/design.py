@@ -45,6 +45,7 @@ __all__ = [
     "design_axis",
     "design_to_toml",
     "format_value",
+    "signed_number",
     "list_templates",
     "load_design",
     "parse_design",
@@ -71,6 +72,16 @@ MESH_MERGE_MM = 0.01
 
 def _number(x) -> bool:
     return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def signed_number(x: float, digits: int) -> str:
+    """A difference with its sign, as tables print it: ``+0.0538``, ``−0.0059`` (true minus sign).
+
+    >>> signed_number(-0.00591, 4)
+    '−0.0059'
+    """
+    text = f"{x:+.{digits}f}"
+    return "−" + text[1:] if text.startswith("-") else text
 
 
 def format_value(value: int, signed: bool) -> str:
@@ -585,11 +596,11 @@ def design_to_toml(design: Design, *, comment: str = "") -> str:
         data["description"] = design.description
     data["family"] = design.family
     data["target"] = design.target
-    data["size_mm"] = float(design.size_mm)
+    data["size_mm"] = _toml_number(design.size_mm)
     if design.params:
-        data["params"] = {k: float(v) for k, v in design.params.items()}
+        data["params"] = {k: _toml_number(v) for k, v in design.params.items()}
     if design.vertices is not None:
-        data["vertices"] = [list(map(float, v)) for v in design.vertices]
+        data["vertices"] = [list(map(_toml_number, v)) for v in design.vertices]
     if design.faces is not None:
         data["faces"] = [list(map(int, f)) for f in design.faces]
     if design.mesh is not None:
@@ -598,16 +609,16 @@ def design_to_toml(design: Design, *, comment: str = "") -> str:
     if design.transitional:
         data["transitional"] = list(design.transitional)
     if design.merge_tolerance_mm is not None:
-        data["merge_tolerance_mm"] = float(design.merge_tolerance_mm)
+        data["merge_tolerance_mm"] = _toml_number(design.merge_tolerance_mm)
     if design.center_of_mass is not None:
-        data["center_of_mass"] = list(design.center_of_mass)
+        data["center_of_mass"] = [_toml_number(x) for x in design.center_of_mass]
     if design.inertia is not None:
-        data["inertia"] = [list(r) for r in design.inertia]
+        data["inertia"] = [[_toml_number(x) for x in r] for r in design.inertia]
     if design.labels:
         data["labels"] = dict(design.labels)
-    data["fill"] = design.fill.to_mapping()
+    data["fill"] = _whole(design.fill.to_mapping())
     if design.physics:
-        data["physics"] = dict(design.physics)
+        data["physics"] = _whole(dict(design.physics))
     header = "".join(f"# {line}\n" for line in comment.splitlines())
     return header + tomli_w.dumps(data)
 
@@ -628,3 +639,18 @@ def placed_marks(design: Design) -> list:
         return [m for m in design.markings if m.at]
     except DesignError:
         return []
+
+
+def _toml_number(x: float) -> int | float:
+    """A whole number as an int (``n = 12``, not ``12.0``), any other as a float.
+
+    >>> _toml_number(12.0), _toml_number(0.5)
+    (12, 0.5)
+    """
+    x = float(x)
+    return int(x) if x.is_integer() and abs(x) < 2**53 else x
+
+
+def _whole(table: dict) -> dict:
+    """`table` with its whole float values written as ints (booleans and strings untouched)."""
+    return {k: _toml_number(v) if isinstance(v, float) else v for k, v in table.items()}

@@ -59,6 +59,21 @@ def _draw(ax, solid: Solid, right: np.ndarray, up: np.ndarray, d: np.ndarray, ti
     ax.set_title(title, fontsize=10)
 
 
+def _label_title(design, label) -> str:
+    """``label on f8: +3 (rests on f1)``: the face carrying the text, and the face the die rests on to show it."""
+    from diefab.dice.design import format_value
+
+    signed = min(design.support) < 0
+    shows = [rest for rest, up in design.label_face.items()
+             if rest in design.values and format_value(design.values[rest], signed) == label.text]  # fmt: skip
+    on_top = [rest for rest in shows if design.label_face[rest] == label.face]
+    if on_top:
+        return f"label on {label.face}: {label.text} (rests on {', '.join(on_top)})"
+    if shows:
+        return f"label on {label.face}: {label.text} (a point up, rests on {', '.join(shows)})"
+    return f"label on {label.face}: {label.text}"
+
+
 def render_preview(solid: Solid, *, dpi: int = 110) -> bytes:
     """PNG bytes: two overviews (die axis vertical) and one straight-on view per label.
 
@@ -80,7 +95,7 @@ def render_preview(solid: Solid, *, dpi: int = 110) -> bytes:
         (_camera(-side - 0.6 * axis - 0.8 * other, axis), "overview from below"),
     ]
     for label in solid.labels:
-        views.append(((np.cross(label.up, label.normal), label.up, label.normal), f"{label.face}: {label.text}"))
+        views.append(((np.cross(label.up, label.normal), label.up, label.normal), _label_title(solid.design, label)))
     cols = 4
     rows = -(-len(views) // cols)
     fig = Figure(figsize=(3 * cols, 3 * rows))

@@ -136,12 +136,10 @@ def symbol_shape(path: str):
 
     from shapely import affinity
 
-    try:
-        from svgelements import SVG, Line, Move, Path, Shape
-    except ImportError:
-        raise FabricationError(
-            f"svg:{path}: reading SVG symbols needs svgelements (pip install 'diefab[svg]')"
-        ) from None
+    from diefab.core.extras import require
+
+    svg = require("svgelements", "svg", f"svg:{path}: reading SVG symbols")
+    SVG, Line, Move, Path, Shape = svg.SVG, svg.Line, svg.Move, svg.Path, svg.Shape
     file = FilePath(path)
     if not file.is_file():
         raise FabricationError(f"svg:{path}: the file {'is not a regular file' if file.exists() else 'does not exist'}")

@@ -336,10 +336,9 @@ def dask_client(scheduler, timeout: float = 3.0):
     seconds (twice that at worst) with a :class:`PhysicsError`: nothing
     listening, a server that stays silent, or one that sends something else.
     """
-    try:
-        from distributed import Client
-    except ImportError as exc:
-        raise PhysicsError("--scheduler needs Dask: pip install 'dask[distributed]'") from exc
+    from diefab.core.extras import require
+
+    Client = require("distributed", "dask", "--scheduler").Client
     if isinstance(scheduler, Client):
         return scheduler, False
     if not isinstance(scheduler, str) or not scheduler.strip():
@@ -493,9 +492,9 @@ def simulate(
 
     try:
         if scheduler is not None:
+            client, own = dask_client(scheduler)  # first: a missing Dask is one line naming the extra
             from distributed import as_completed
 
-            client, own = dask_client(scheduler)
             try:
                 futures = client.map(run_batch, [body] * len(batches), [settings] * len(batches), [seed] * len(batches),
                                      [a for a, _ in batches], [b for _, b in batches], pure=False)  # fmt: skip
@@ -548,10 +547,13 @@ def simulate(
 # the chart
 
 
-def plot_validation(design: Design, result: RollResult, *, fmt: str = "png", alpha: float = 0.05) -> bytes:
-    """Bar chart of simulated value probabilities (with simultaneous CIs), target and solid-angle model.
+def plot_validation(design: Design, result: RollResult, *, fmt: str = "png", alpha: float = 0.05,
+                    model: str | None = None) -> bytes:  # fmt: skip
+    """Bar chart of simulated value probabilities (with simultaneous CIs), target and a landing model.
 
     Returns the image as bytes (`fmt` ``png`` or ``svg``); the caller writes it.
+    `model` is a key of :data:`diefab.models.MODELS` (default: the one to trust
+    for the die, :func:`diefab.models.choice.best_model`).
     """
     import io
 
@@ -570,7 +572,10 @@ def plot_validation(design: Design, result: RollResult, *, fmt: str = "png", alp
     sim = counts / max(counts.sum(), 1)
     ci = goodman_intervals(counts, alpha) if counts.sum() else np.zeros((len(values), 2))
     target = design.target_distribution.aligned(values)
-    model = value_probabilities(design, "solid-angle")
+    from diefab.models.choice import best_model
+
+    name = model or best_model(design).name
+    model = value_probabilities(design, name)
     x = np.arange(len(values))
     fig = Figure(figsize=(7.5, 4.2), dpi=120)
     ax = fig.add_subplot()
@@ -578,7 +583,7 @@ def plot_validation(design: Design, result: RollResult, *, fmt: str = "png", alp
     ax.bar(x - w, sim, w, yerr=[sim - ci[:, 0], ci[:, 1] - sim], capsize=3, color="#3b75af",
            label=f"simulated ({result.landed} drops, {1 - alpha:.0%} simultaneous CI)")  # fmt: skip
     ax.bar(x, target, w, color="#9e9e9e", label=f"target {design.target}")
-    ax.bar(x + w, model, w, color="#e5a04b", label="solid-angle model")
+    ax.bar(x + w, model, w, color="#e5a04b", label=f"{name} model")
     from diefab.dice.design import format_value
 
     ax.set_xticks(x, [format_value(int(v), min(values) < 0) for v in values])
