@@ -60,9 +60,8 @@ def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, del
         goal = parse_target(target)
         values, column = read_roll_column(rolls)
         if not as_json:
-            click.echo(
-                f"read column {column!r} of {rolls}" if column else f"read {len(values)} rolls of {rolls}", err=True
-            )
+            note = f"read column {column!r} of {rolls}" if column else f"read {len(values)} rolls of {rolls}"
+            click.echo(note, err=True)
         x = counts_from_rolls(values, goal.values)
         seq = sequential_test(np.searchsorted(goal.values, values), goal.probabilities, delta, alpha)
     if sequential:
