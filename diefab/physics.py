@@ -650,6 +650,7 @@ def simulate(
     """
     from concurrent.futures.process import BrokenProcessPool
 
+    from .stopping import check_stop
     from .world import COCKED, UNSETTLED, run_batch
 
     settings = settings or PhysicsSettings.from_mapping(design.physics)
@@ -685,6 +686,7 @@ def simulate(
                 try:
                     for future in as_completed(futures):
                         finished(*where[future.key], future.result())
+                        check_stop()
                 except BaseException:
                     client.cancel(futures)
                     raise
@@ -694,6 +696,7 @@ def simulate(
         elif workers == 1:
             for start, stop in batches:
                 finished(start, stop, run_batch(body, settings, seed, start, stop))
+                check_stop()
         else:
             from concurrent.futures import FIRST_COMPLETED, wait
 
@@ -705,6 +708,7 @@ def simulate(
                 ready, _ = wait(pending, timeout=SIGNAL_POLL, return_when=FIRST_COMPLETED)
                 for future in ready:
                     finished(*pending.pop(future), future.result())
+                check_stop()  # an interrupt that landed where it was swallowed (inside the pool's machinery)
     except KeyboardInterrupt:
         if scheduler is None and workers > 1:
             shutdown_pool(kill=True)
