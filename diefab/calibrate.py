@@ -442,6 +442,8 @@ class CalibrationSpec:
 class CalibrationLog(RunLog):
     """A calibration run folder: ``run.json`` (:class:`CalibrationSpec`) and ``evaluations.jsonl``."""
 
+    FEASIBLE = ("deviance",)
+
     def spec(self) -> CalibrationSpec:
         text = self.spec_text()
         spec = CalibrationSpec.from_json(text, str(self.spec_path))

@@ -173,6 +173,14 @@ class RunSpec:
         def bad(msg: str) -> None:
             raise DesignError(msg)
 
+        kinds = {"design_toml": str, "start": str, "labels": bool, "physics": dict}
+        for name, kind in kinds.items():
+            if not isinstance(getattr(self, name), kind):
+                bad(f"{name}={getattr(self, name)!r} must be a {kind.__name__}")
+        if not all(isinstance(n, str) for n in self.names) or not all(map(_is_number, self.x0)):
+            bad(f"names {self.names!r} must be strings and x0 {self.x0!r} finite numbers")
+        if not all(isinstance(t, dict) for t in self.robust):
+            bad(f"robust={self.robust!r} must be a list of physics tables")
         if self.objective not in ("eq2", "tvd"):
             bad(f"objective={self.objective!r} must be eq2 or tvd for a simulation run")
         if self.method not in METHODS:
@@ -680,6 +688,9 @@ class RunLog:
     is appended.
     """
 
+    #: Keys every simulated (feasible) record holds.
+    FEASIBLE: tuple[str, ...] = ("min_margin",)
+
     def __init__(self, folder: str | Path) -> None:
         from .runid import IDENTITY_FILE
 
@@ -751,6 +762,14 @@ class RunLog:
         text = self.spec_text()
         spec = RunSpec.from_json(text, str(self.spec_path))
         self.check_identity(text)
+        from .physics import PhysicsSettings
+
+        try:  # the design and every physics table must load before anything runs
+            spec.design  # noqa: B018
+            for table in (spec.physics, *spec.robust):
+                PhysicsSettings.from_mapping(table)
+        except (DiefabError, ValueError, KeyError, TypeError, AttributeError) as exc:
+            raise RunError(f"{self.spec_path} is not a diefab run description: {exc}") from None
         return spec
 
     def spec_text(self) -> str:
@@ -817,6 +836,12 @@ class RunLog:
         self._good = sum(len(line) + 1 for line in complete[: len(records)])
         if len(records) > len(complete):
             self._good = len(raw)
+        names = set(self.spec().names)
+        for number, record in enumerate(records, start=1):
+            if not names <= set(record["params"]) or (record["feasible"] and not all(
+                    k in record for k in self.FEASIBLE)):  # fmt: skip
+                raise RunError(f"{self.path} line {number} is corrupt (not an evaluation of this run); the run "
+                               "cannot be resumed")  # fmt: skip
         return records, warning
 
     def open(self) -> None:
@@ -877,6 +902,8 @@ def _read_capped(path: Path, limit: int) -> bytes:
     return data
 
 
+#: Optional keys of a record that must be numbers when present.
+_NUMBERS = ("elapsed", "seconds", "min_margin", "deviance", "cocked", "unsettled")
 _REQUIRED = {"i": int, "kind": str, "x": list, "params": dict, "drops": int, "objective": float, "feasible": bool}
 
 
@@ -898,6 +925,8 @@ def _parse_record(line: bytes, index: int) -> dict[str, Any] | None:
     if not 0 <= record["drops"] <= MAX_DROPS or not _is_number(record["objective"]):
         return None
     if not all(_is_number(v) for v in record["x"]) or not all(_is_number(v) for v in record["params"].values()):
+        return None
+    if not all(_is_number(record[k]) for k in _NUMBERS if k in record):
         return None
     counts = record.get("face_counts", [])
     if not (isinstance(counts, list) and all(isinstance(c, int) and not isinstance(c, bool) and c >= 0 for c in counts)
