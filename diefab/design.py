@@ -29,11 +29,15 @@ import numpy as np
 from .errors import DesignError, GeometryError
 from .families import family
 from .families.base import default_length
+from .files import check_size
 from .geometry import Polyhedron, face_margins, resting_faces
 from .mass import Fill, MassProperties, mesh_mass_properties, stated
 from .meshes import ClosedMesh
 from .schema import check_design_data, check_mapping
 from .targets import Target, parse_target
+
+#: Largest design file read, bytes (a convex die of a thousand faces is under a megabyte).
+DESIGN_MAX_BYTES = 16 << 20
 
 __all__ = [
     "Design",
@@ -479,7 +483,8 @@ def load_design(spec: str | Path) -> Design:
         if path.stat().st_size > MAX_DESIGN_BYTES:
             raise DesignError(f"design file {text} is larger than {MAX_DESIGN_BYTES >> 20} MiB")
         try:
-            content = path.read_text(encoding="utf-8")
+            check_size(path, DESIGN_MAX_BYTES, "design file", DesignError)
+            content = path.read_text(encoding="utf-8-sig")  # a byte-order mark is not TOML
         except (OSError, UnicodeDecodeError) as exc:
             raise DesignError(f"cannot read design file {text}: {exc}") from exc
         return parse_design(content, source=text, base=path.parent)

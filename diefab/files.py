@@ -40,6 +40,7 @@ __all__ = [
     "LockError",
     "atomic_write",
     "check_outputs",
+    "check_size",
     "ensure_dir",
     "hold_lock",
     "hold_outputs",
@@ -82,6 +83,21 @@ def output_path(folder: str | Path, name: str, suffix: str) -> Path:
             "a file system accepts: give the design a shorter name"
         )
     return Path(folder) / filename
+
+
+def check_size(path: str | Path, limit: int, what: str, error: type[Exception] = OutputError) -> None:
+    """Raise `error` if the file `path` is larger than `limit` bytes (its apparent size: a sparse file counts whole).
+
+    Inputs go through this before they are read, so that memory stays
+    bounded whatever the file; a file that cannot be inspected is left to
+    the reader's own error.
+    """
+    try:
+        size = os.stat(path).st_size
+    except (OSError, ValueError):
+        return
+    if size > limit:
+        raise error(f"{what} {path} is {size:,} bytes, more than the {limit:,} any die needs")
 
 
 def ensure_dir(path: str | Path) -> Path:

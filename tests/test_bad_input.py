@@ -272,7 +272,7 @@ def test_bad_arguments(tmp_path, bad, monkeypatch, args, words):
 ROLL_LOGS = [
     # (roll log text, words)
     ("1 2 " + "9" * 30 + "\n", "not a die value"),
-    ("0 " + "7" * 5_000_000 + "\n", "not a die value"),
+    ("0 " + "7" * 5_000_000 + "\n", "larger than 4 MiB"),
     ("value\n1\n\u22123\nx\n", ":4"),
 ]
 
@@ -1149,3 +1149,95 @@ def test_a_full_disk_writing_run_json_leaves_no_run_folder(tmp_path, bad, monkey
 
 def test_optimize_caps_the_drops_per_evaluation_like_calibrate(bad):
     assert "at most 100,000,000" in bad(*OPT, "--max-sims-per-eval", str(10**12))
+
+
+# ----------------------------------------------------------------------
+# bounded inputs: limits no real die reaches, refused in one line before the work
+
+
+#: A mesh design of the box in m.stl, a value on each face.
+_MESH_TOML = 'name = "m"\nfamily = "mesh"\ntarget = "uniform:6"\nmesh = "m.stl"\n[values]\n' + "".join(
+    f"f{i} = {i}\n" for i in range(1, 7))  # fmt: skip
+
+
+def _sparse(path: Path, size: int) -> Path:
+    with open(path, "wb") as fh:
+        fh.truncate(size)
+    return path
+
+
+def _binary_stl(path: Path, count: int, triangles: int) -> Path:
+    path.write_bytes(b"\0" * 80 + count.to_bytes(4, "little") + b"\0" * 50 * triangles)
+    return path
+
+
+BOUNDED = [
+    # (arguments, files to make: name -> maker(path), words of the one-line error)
+    (["validate", "fudge-gem", "--time-step", "1e-300", "--sims", "50"], {}, "time_step=1e-300 must be in [0.0001"),
+    (["predict", "fudge-gem", "--fill", "print", "--layer-height", "1e-8"], {}, "layer_mm=1e-08 is outside [0.01"),
+    (["predict", "fudge-gem", "--fill", "print", "--layer-height", "1e-9"], {}, "layer_mm=1e-09 is outside [0.01"),
+    (["predict", "m.toml"], {"m.stl": lambda p: _sparse(p, 2 << 30)}, "more than the 128 MiB"),
+    (["predict", "m.toml"], {"m.stl": lambda p: _binary_stl(p, 1000, 3)}, "would be 50,084 bytes, not 234"),
+    (["validate", "fudge-gem", "--physics", "p.toml"], {"p.toml": lambda p: _sparse(p, 2 << 30)},
+     "physics profile"),
+    (["calibrate", "--realrolls", "r.json"], {"r.json": lambda p: _sparse(p, 2 << 30)}, "real rolls"),
+    (["stats", "--target", "4df", "--rolls", "r.txt"], {"r.txt": lambda p: _sparse(p, 40 << 20)}, "larger than 4 MiB"),
+    (["stats", "--counts", "1,1", "--target", "0.5000000000005,0.4999999999995"], {}, None),
+    (["design", "1,2,3,4,5,6", "--size", "1e9"], {}, "outside [1, 1000] mm"),
+    (["net", "fudge-gem", "--size", "1e-9"], {}, "outside [1, 1000] mm"),
+    (["stl", "fudge-gem", "--round", "1e-7"], {}, "must be 0 (sharp) or at least 0.01 mm"),
+    (["predict", "bom.toml"], {"bom.toml": lambda p: p.write_bytes(b"\xef\xbb\xbf" + Path(str(template_path(
+        "fudge-gem"))).read_bytes())}, None),  # fmt: skip
+]
+
+
+@pytest.mark.parametrize(("args", "files", "words"), BOUNDED, ids=[" ".join(a)[:50] for a, _, _ in BOUNDED])
+def test_bounded_inputs(tmp_path, bad, run, monkeypatch, args, files, words):
+    monkeypatch.chdir(tmp_path)
+    Path("m.toml").write_text(_MESH_TOML)
+    for name, make in files.items():
+        make(tmp_path / name)
+    if words is None:  # an input that used to fail: it works
+        code, _, err = run(*args)
+        assert code == 0, err
+    else:
+        assert words in bad(*args, "--out", tmp_path / "o") if args[0] in ("design", "net", "stl") else words in bad(
+            *args)  # fmt: skip
+
+
+def test_a_mesh_with_nan_vertices_says_so(tmp_path, bad):
+    import trimesh
+
+    box = trimesh.creation.box((2, 2, 2))
+    box.vertices[0] = np.nan
+    box.export(tmp_path / "m.stl")
+    (tmp_path / "m.toml").write_text(_MESH_TOML)
+    assert "NaN or infinite coordinates" in bad("predict", tmp_path / "m.toml")
+
+
+def test_a_hull_of_too_many_faces_is_refused_fast(tmp_path, bad):
+    import trimesh
+
+    trimesh.creation.icosphere(subdivisions=6).export(tmp_path / "s.stl")  # 81,920 faces: minutes and gigabytes
+    (tmp_path / "s.toml").write_text('name = "s"\nfamily = "mesh"\ntarget = "uniform:6"\nmesh = "s.stl"\n')
+    assert "simplify the mesh" in bad("predict", tmp_path / "s.toml")
+
+
+def test_an_svg_symbol_of_too_many_points_is_refused(tmp_path, bad):
+    pytest.importorskip("svgelements")
+    path = " ".join(f"L {i % 100} {i // 100 % 2}" for i in range(60_000))
+    (tmp_path / "big.svg").write_text(f'<svg xmlns="http://www.w3.org/2000/svg"><path d="M 0 0 {path} Z"/></svg>')
+    design = tomllib.loads(Path(str(template_path("d6"))).read_text())
+    design["labels"] = {"f1": "svg:big.svg"}
+    (tmp_path / "d.toml").write_text(tomli_w.dumps(design))
+    line = bad("net", tmp_path / "d.toml", "--out", tmp_path / "o")
+    assert "more than" in line and "big.svg" in line
+
+
+@pytest.mark.parametrize("name", ["{x}[/bold]", "[link=file:///etc/passwd]x[/link]", "[bold red]z"])
+def test_names_are_printed_as_they_are(tmp_path, run, name):
+    design = dict(GEM, name=name)
+    (tmp_path / "d.toml").write_text(tomli_w.dumps(design))
+    code, out, err = run("predict", tmp_path / "d.toml")
+    assert code == 0, err
+    assert out.splitlines()[0].startswith(name)

@@ -10,6 +10,8 @@ import numpy as np
 from ..calibrate import DEFAULT_FREE
 from ..files import atomic_write, check_outputs, output_path, safe_name
 from .common import (
+    BOLD,
+    PLAIN,
     check_resume_folder,
     console,
     design_inputs,
@@ -309,7 +311,7 @@ def print_report(report) -> None:
     from rich.table import Table
 
     con = console()
-    con.print(f"[bold]{report['name']}[/bold]: deviance {report['deviance']:.2f} "
+    con.print(f"{BOLD}{report['name']}{PLAIN}: deviance {report['deviance']:.2f} "
               f"({report['deviance_per_roll']:.4f} per roll) at {report['drops_per_die']} drops per die"
               + ("" if report["start_deviance"] is None else
                  f"; at the start {report['start_deviance']:.2f} ({report['start_drops_per_die']} drops)"))  # fmt: skip

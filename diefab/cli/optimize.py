@@ -11,6 +11,8 @@ import numpy as np
 from ..design import format_value
 from ..files import atomic_write, check_outputs, ensure_dir, output_path, safe_name
 from .common import (
+    BOLD,
+    PLAIN,
     apply_fill,
     check_resume_folder,
     console,
@@ -134,7 +136,7 @@ def optimize(ctx, design, params, model, target, seed, min_margin, starts, free,
         return
     con = console()
     con.print(
-        f"[bold]{best.name}[/bold]  "
+        f"{BOLD}{best.name}{PLAIN}  "
         + " ".join(f"{k}={v:.4f}" for k, v in best.params.items())
         + f"\n{objective} = {result.objective:.5f} under the {model} model "
         f"({result.evaluations} evaluations from {result.starts} starts)"
@@ -367,7 +369,7 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         return
     con = console()
     con.print(
-        f"[bold]{run_name}[/bold]  "
+        f"{BOLD}{run_name}{PLAIN}  "
         + " ".join(f"{k}={v:.4f}" for k, v in best["params"].items())
         + f"\n{spec.objective} = {best['objective']:.5f} at {best['drops']} drops (seed {spec.seed}); "
         f"{result.evaluations} evaluations ({result.replayed} replayed), {report['drops']:,} drops; "
