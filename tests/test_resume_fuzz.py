@@ -20,7 +20,7 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from diefab.cli import main
-from diefab.runid import identity_text
+from diefab.search.runid import identity_text
 
 FILES = ["run.json", "identity.json", "evaluations.jsonl"]
 COMMON = ["--workers", "1", "--json"]
