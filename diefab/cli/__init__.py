@@ -106,7 +106,7 @@ def _main(argv: list[str] | None) -> None:
     except SystemExit:  # the command's own exit (an interrupted run that said how to resume)
         raise
     except BaseException as exc:
-        if stop_requested() and not isinstance(exc, KeyboardInterrupt):  # the damage of a swallowed stop
+        if stop_requested() and not isinstance(exc, (KeyboardInterrupt, click.exceptions.Exit)):  # a swallowed stop
             _interrupted()
         _fail(exc)
     sys.exit(rv if isinstance(rv, int) else 0)
