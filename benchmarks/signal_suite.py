@@ -96,14 +96,15 @@ def trial(command: str, signum: int, to_group: bool, delay: float) -> str:
         return f"unclean (exit {proc.returncode}: {' | '.join(lines)[-200:]})"
 
 
-def run_trials(n: int, seed: int = 0, commands=tuple(COMMANDS), latest: float = LATEST) -> collections.Counter:
+def run_trials(n: int, seed: int = 0, commands=tuple(COMMANDS), earliest: float = 0.0,
+               latest: float = LATEST) -> collections.Counter:  # fmt: skip
     """`n` trials, round-robin over the commands and signals, random targets and delays (seeded)."""
     rng = random.Random(seed)
     counts: collections.Counter = collections.Counter()
     for i in range(n):
         command = commands[i % len(commands)]
         signum = SIGNALS[(i // len(commands)) % len(SIGNALS)]
-        to_group, delay = rng.random() < 0.5, rng.uniform(0.0, latest)
+        to_group, delay = rng.random() < 0.5, rng.uniform(earliest, latest)
         outcome = trial(command, signum, to_group, delay)
         counts[outcome.split(" (")[0]] += 1
         if outcome.startswith(("unclean", "traceback")):

@@ -101,7 +101,8 @@ def _main(argv: list[str] | None) -> None:
 
     try:
         rv = cli.main(args=argv, prog_name="diefab", standalone_mode=False)
-        check_stop()  # a stop whose exception something swallowed is still a stop
+        if not rv:  # a command that succeeded after a stop whose exception something swallowed: still a stop
+            check_stop()
         sys.stdout.flush()
     except SystemExit:  # the command's own exit (an interrupted run that said how to resume)
         raise
