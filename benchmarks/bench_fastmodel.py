@@ -320,8 +320,8 @@ def ablation(training: TrainingSet, test, test_q) -> None:
 
 def optima(drops: int, seeds=(1, 2), workers: int | None = None) -> None:
     """The 4dF optimum of the fast model and of its chain alone, each validated by simulation."""
-    from diefab.models.probabilities import MODELS
     from diefab.models import fast as fastmodel
+    from diefab.models.probabilities import MODELS
     from diefab.physics.simulate import simulate
     from diefab.search.optimize import optimize_design
 
@@ -380,8 +380,8 @@ def main(argv=None) -> None:
     if args.collect_only:
         return
 
-    from diefab.models.probabilities import MODELS
     from diefab.models import fast as fastmodel
+    from diefab.models.probabilities import MODELS
 
     constants = {}
     if args.calibrate:

@@ -141,8 +141,8 @@ def fit(path: Path = TRAINING, maxfev: int = 600, keep_chain: bool = False) -> N
     """
     from diefab.core.files import atomic_write
     from diefab.dice.families.sampling import record_design
-    from diefab.models.probabilities import correction
     from diefab.models import fast as fastmodel
+    from diefab.models.probabilities import correction
 
     runs = read_runs(path)
     t = time.perf_counter()
