@@ -701,7 +701,7 @@ class RunLog:
         self._fh = None
         self._created = False  # create() made the folder itself
 
-    def lock(self) -> None:
+    def lock(self, _creating: bool = False) -> None:
         """Take the run's lock (until :func:`diefab.core.files.release_locks`): a second process is refused.
 
         Raises
@@ -712,7 +712,9 @@ class RunLog:
         from diefab.core.files import ensure_dir
 
         folder = Path(os.path.abspath(self.folder))
-        if folder.parent != folder:
+        if not folder.is_dir():  # a resume of nothing: spec_text() says so; a new run: its parent is made now
+            if not _creating:
+                return
             ensure_dir(folder.parent)
         hold_lock(folder.resolve() if folder.exists() else folder, f"run {self.folder}")
 
@@ -725,7 +727,7 @@ class RunLog:
 
     def create(self, spec: RunSpec) -> None:
         """Start the run: take its lock (:meth:`lock`), then write ``run.json``, its identity and an empty log."""
-        self.lock()
+        self.lock(_creating=True)
         if self.holds_run():
             raise RunError(f"{self.folder} already holds a run: resume it with --resume {self.folder} or pick --name")
         self._created = not self.folder.exists()
