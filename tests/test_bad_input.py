@@ -1241,3 +1241,11 @@ def test_names_are_printed_as_they_are(tmp_path, run, name):
     code, out, err = run("predict", tmp_path / "d.toml")
     assert code == 0, err
     assert out.splitlines()[0].startswith(name)
+
+
+def test_a_needle_mesh_is_one_line_in_net(tmp_path, bad):
+    import trimesh
+
+    trimesh.creation.box((2, 0.002, 0.002)).export(tmp_path / "m.stl")
+    (tmp_path / "m.toml").write_text(_MESH_TOML)
+    assert "wide enough for it to rest on" in bad("net", tmp_path / "m.toml", "--out", tmp_path / "o")
