@@ -5,6 +5,8 @@ imports with NumPy alone; SciPy, trimesh, pybullet, manifold3d and matplotlib
 are imported by the functions that need them.
 """
 
+# first: run as the command line, a stop signal during the heavy imports below ends it in one line
+from diefab.core import stopping as _stopping  # noqa: F401
 from diefab.core.errors import (
     DesignError,
     DiefabError,

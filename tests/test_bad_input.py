@@ -272,7 +272,7 @@ def test_bad_arguments(tmp_path, bad, monkeypatch, args, words):
 ROLL_LOGS = [
     # (roll log text, words)
     ("1 2 " + "9" * 30 + "\n", "not a die value"),
-    ("0 " + "7" * 5_000_000 + "\n", "not a die value"),
+    ("0 " + "7" * 5_000_000 + "\n", "larger than 4 MiB"),
     ("value\n1\n\u22123\nx\n", ":4"),
 ]
 
@@ -967,3 +967,303 @@ def test_any_value_in_any_realrolls_field_is_a_die_or_a_diefab_error(field, tmp_
             pass
 
     check()
+
+
+# ----------------------------------------------------------------------
+# one process per run, runs that cannot change, outputs that cannot replace inputs
+
+OPT = ["optimize", "fudge-gem", "--model", "simulation", "--start", "design", "--sims-per-eval", "16", "--workers", "1"]
+
+
+def _holder(target: Path):
+    """A child process holding the lock of `target` (a run folder or an output file) until killed."""
+    code = ("import sys, time; from diefab.core.files import ExclusiveLock; ExclusiveLock(sys.argv[1], 'x').acquire(); "
+            "print('held', flush=True); time.sleep(120)")  # fmt: skip
+    proc = subprocess.Popen([sys.executable, "-c", code, str(target)], stdout=subprocess.PIPE, text=True,
+                            cwd=Path(__file__).parent.parent)  # fmt: skip
+    assert proc.stdout.readline().strip() == "held"
+    return proc
+
+
+@pytest.mark.parametrize("fresh", [True, False], ids=["fresh", "resume"])
+def test_a_second_process_on_a_run_is_refused_naming_the_holder(tmp_path, bad, run, fresh):
+    folder = tmp_path / "r"
+    if not fresh:
+        code, _, err = run(*OPT, "--max-evals", "1", "--name", "r", "--out", tmp_path)
+        assert code == 0, err
+    before = {p.name for p in tmp_path.rglob("*")}
+    proc = _holder(folder)
+    try:
+        args = ["--name", "r", "--out", tmp_path] if fresh else ["--resume", folder]
+        line = bad(*OPT, "--max-evals", "2", *args)
+        assert f"run {folder} is in use by process {proc.pid}" in line
+        assert {p.name for p in tmp_path.rglob("*")} == before | {".r.lock"}  # nothing written
+    finally:
+        proc.kill()
+        proc.communicate()
+    code, _, err = run(*OPT, "--max-evals", "2", *args)  # the holder died: its lock went with it
+    assert code == 0, err
+    assert not list(tmp_path.glob(".*.lock"))
+
+
+def test_two_runs_with_the_same_name_do_not_merge(tmp_path, run):
+    """The second of two concurrent runs with one --name is refused; the log and best design are the first's."""
+    command = [sys.executable, "-m", "diefab", *OPT, "--max-evals", "40", "--name", "r", "--out", str(tmp_path),
+               "--seed", "1"]  # fmt: skip
+    proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 60
+        while not (tmp_path / "r" / "run.json").exists() and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.02)
+        code, _, err = run(*OPT, "--max-evals", "40", "--name", "r", "--out", tmp_path, "--seed", "2")
+        assert code == 2 and f"is in use by process {proc.pid}" in err or "already holds a run" in err, err
+    finally:
+        _, err = proc.communicate(timeout=300)
+    assert proc.returncode == 0, err
+    assert json.loads((tmp_path / "r" / "run.json").read_text())["seed"] == 1
+    best = tomllib.loads((tmp_path / "r" / "r.toml").read_text())["params"]
+    logged = [json.loads(t)["params"] for t in (tmp_path / "r" / "evaluations.jsonl").read_text().splitlines()]
+    assert any(all(np.isclose(p[k], best[k]) for k in best) for p in logged)
+
+
+def test_one_shot_outputs_are_locked(tmp_path, bad):
+    proc = _holder(tmp_path / "fudge-gem-net.svg")
+    try:
+        line = bad("net", "fudge-gem", "--format", "svg", "--out", tmp_path)
+        assert f"is in use by process {proc.pid}" in line and "fudge-gem-net.svg" in line
+    finally:
+        proc.kill()
+        proc.communicate()
+    assert not (tmp_path / "fudge-gem-net.svg").exists()
+
+
+def _edit_spec(folder: Path, change) -> None:
+    spec = json.loads((folder / "run.json").read_text())
+    change(spec)
+    (folder / "run.json").write_text(json.dumps(spec))
+
+
+EDITS = [
+    # (what is changed in run.json, the field named)
+    (lambda s: s["physics"].update(restitution=0.5), "physics.restitution"),
+    (lambda s: s.update(seed=7), "seed"),
+    (lambda s: s.update(design_toml=s["design_toml"] + "# edited\n"), "design_toml"),
+    (lambda s: s.update(budget_minutes=99.0), "budget_minutes"),
+    (lambda s: s.update(max_evaluations=9), "max_evaluations"),
+]
+
+
+@pytest.mark.parametrize(("change", "field"), EDITS, ids=[f for _, f in EDITS])
+def test_an_edited_run_json_is_refused_naming_the_field(tmp_path, bad, run, change, field):
+    code, _, err = run(*OPT, "--max-evals", "1", "--name", "r", "--out", tmp_path)
+    assert code == 0, err
+    _edit_spec(tmp_path / "r", change)
+    line = bad(*OPT, "--resume", tmp_path / "r")
+    assert "changed since it started" in line and field in line
+
+
+def test_a_calibration_with_edited_counts_or_no_identity_is_refused(tmp_path, bad, calibration_run):
+    text = (calibration_run / "run.json").read_text()
+    _edit_spec(calibration_run, lambda s: s["dice"][0].update(counts=[11, 11, 9, 10, 12, 8]))
+    line = bad("calibrate", "--resume", calibration_run)
+    assert "dice[d6].counts" in line
+    (calibration_run / "run.json").write_text(text)
+    (calibration_run / "identity.json").unlink()
+    assert "has no identity.json" in bad("calibrate", "--resume", calibration_run)
+
+
+def test_a_calibration_keeps_its_budget_and_evaluation_limit(calibration_run, run):
+    spec = json.loads((calibration_run / "run.json").read_text())
+    assert spec["max_evaluations"] == 2 and spec["budget_minutes"] == 20
+    code, out, err = run("calibrate", "--resume", calibration_run, "--workers", "1", "--json")
+    assert code == 0, err
+    assert json.loads(out)["evaluations"] == 2  # the stored limit, not a new 20-minute run
+
+
+def _mesh_design(folder: Path) -> Path:
+    import trimesh
+
+    folder.mkdir(parents=True, exist_ok=True)
+    trimesh.creation.box((2.0, 1.6, 1.2)).export(folder / "m.stl")
+    values = "".join(f"f{i} = {i}\n" for i in range(1, 7))
+    text = f'name = "m"\nfamily = "mesh"\ntarget = "uniform:6"\nmesh = "m.stl"\n[values]\n{values}'
+    (folder / "m.toml").write_text(text)
+    return folder / "m.toml"
+
+
+def test_a_mesh_calibration_resumes_from_anywhere_and_refuses_a_changed_mesh(tmp_path, bad, run, monkeypatch):
+    import trimesh
+
+    design = _mesh_design(tmp_path / "a" / "d")
+    monkeypatch.chdir(tmp_path / "a")
+    code, _, err = run(
+        "calibrate",
+        "--die",
+        "d/m.toml",
+        "10,11,9,10,12,8",
+        "--free",
+        "restitution",
+        "--sims-per-eval",
+        "20",
+        "--workers",
+        "1",
+        "--max-evals",
+        "1",
+        "--name",
+        "c",
+        "--out",
+        "o",
+    )
+    assert code == 0, err
+    other = tmp_path / "b"
+    _mesh_design(other / "d")  # the same relative path from elsewhere: another mesh of the same name
+    trimesh.creation.box((2.0, 1.0, 1.0)).export(other / "d" / "m.stl")
+    monkeypatch.chdir(other)
+    code, out, err = run("calibrate", "--resume", tmp_path / "a" / "o" / "c", "--max-evals", "2", "--json")
+    assert code == 0, err  # the stored path is absolute: the run's own mesh
+    assert json.loads(out)["replayed"] == 1
+    trimesh.creation.box((2.0, 1.0, 1.0)).export(design.parent / "m.stl")
+    line = bad("calibrate", "--resume", tmp_path / "a" / "o" / "c", "--max-evals", "3")
+    assert "mesh file" in line and "changed since it started" in line
+
+
+def test_calibrate_never_replaces_its_inputs(tmp_path, bad, run):
+    (tmp_path / "o" / "c").mkdir(parents=True)
+    design = tmp_path / "o" / "c" / "c.toml"
+    design.write_text(Path(str(template_path("d6"))).read_text())
+    before = design.read_bytes()
+    line = bad("calibrate", "--die", design, "10,11,9,10,12,8", "--free", "restitution", "--sims-per-eval", "20",
+               "--workers", "1", "--max-evals", "1", "--name", "c", "--out", tmp_path / "o")  # fmt: skip
+    assert "would replace" in line and design.read_bytes() == before
+    log = tmp_path / "rolls.txt"
+    log.write_text("1\n2\n3\n4\n5\n6\n" * 4)
+    line = bad("calibrate", "--die", "d6", log, "--free", "restitution", "--name", "rolls.txt", "--out", tmp_path)
+    assert "rolls.txt" in line
+
+
+def test_calibrate_resume_dot_names_the_profile_after_its_folder(calibration_run, run, monkeypatch):
+    monkeypatch.chdir(calibration_run)
+    code, _, err = run("calibrate", "--resume", ".", "--max-evals", "3", "--workers", "1")
+    assert code == 0, err
+    assert not (calibration_run / "_.toml").exists() and (calibration_run / "c.toml").is_file()
+
+
+def test_a_full_disk_writing_run_json_leaves_no_run_folder(tmp_path, bad, monkeypatch):
+    import errno
+
+    import diefab.search.simopt as simopt
+
+    def full(files, **kwargs):
+        raise simopt.OutputError(f"cannot write {next(iter(files))}: {os.strerror(errno.ENOSPC)}")
+
+    monkeypatch.setattr(simopt, "write_files", full)
+    assert "No space left" in bad(*OPT, "--max-evals", "1", "--name", "r", "--out", tmp_path)
+    assert not (tmp_path / "r").exists() and not list(tmp_path.glob(".*.lock"))
+    assert "No space left" in bad("calibrate", *DIE, "--free", "restitution", "--name", "c", "--out", tmp_path)
+    assert not (tmp_path / "c").exists()
+
+
+def test_optimize_caps_the_drops_per_evaluation_like_calibrate(bad):
+    assert "at most 100,000,000" in bad(*OPT, "--max-sims-per-eval", str(10**12))
+
+
+# ----------------------------------------------------------------------
+# bounded inputs: limits no real die reaches, refused in one line before the work
+
+
+#: A mesh design of the box in m.stl, a value on each face.
+_MESH_TOML = 'name = "m"\nfamily = "mesh"\ntarget = "uniform:6"\nmesh = "m.stl"\n[values]\n' + "".join(
+    f"f{i} = {i}\n" for i in range(1, 7))  # fmt: skip
+
+
+def _sparse(path: Path, size: int) -> Path:
+    with open(path, "wb") as fh:
+        fh.truncate(size)
+    return path
+
+
+def _binary_stl(path: Path, count: int, triangles: int) -> Path:
+    path.write_bytes(b"\0" * 80 + count.to_bytes(4, "little") + b"\0" * 50 * triangles)
+    return path
+
+
+BOUNDED = [
+    # (arguments, files to make: name -> maker(path), words of the one-line error)
+    (["validate", "fudge-gem", "--time-step", "1e-300", "--sims", "50"], {}, "time_step=1e-300 must be in [0.0001"),
+    (["predict", "fudge-gem", "--fill", "print", "--layer-height", "1e-8"], {}, "layer_mm=1e-08 is outside [0.01"),
+    (["predict", "fudge-gem", "--fill", "print", "--layer-height", "1e-9"], {}, "layer_mm=1e-09 is outside [0.01"),
+    (["predict", "m.toml"], {"m.stl": lambda p: _sparse(p, 2 << 30)}, "more than the 128 MiB"),
+    (["predict", "m.toml"], {"m.stl": lambda p: _binary_stl(p, 1000, 3)}, "would be 50,084 bytes, not 234"),
+    (["validate", "fudge-gem", "--physics", "p.toml"], {"p.toml": lambda p: _sparse(p, 2 << 30)}, "physics profile"),
+    (["calibrate", "--realrolls", "r.json"], {"r.json": lambda p: _sparse(p, 2 << 30)}, "real rolls"),
+    (["stats", "--target", "4df", "--rolls", "r.txt"], {"r.txt": lambda p: _sparse(p, 40 << 20)}, "larger than 4 MiB"),
+    (["stats", "--counts", "1,1", "--target", "0.5000000000005,0.4999999999995"], {}, None),
+    (["design", "1,2,3,4,5,6", "--size", "1e9"], {}, "outside [1, 1000] mm"),
+    (["net", "fudge-gem", "--size", "1e-9"], {}, "outside [1, 1000] mm"),
+    (["stl", "fudge-gem", "--round", "1e-7"], {}, "must be 0 (sharp) or at least 0.01 mm"),
+    (
+        ["predict", "bom.toml"],
+        {"bom.toml": lambda p: p.write_bytes(b"\xef\xbb\xbf" + Path(str(template_path("fudge-gem"))).read_bytes())},
+        None,
+    ),  # fmt: skip
+]
+
+
+@pytest.mark.parametrize(("args", "files", "words"), BOUNDED, ids=[" ".join(a)[:50] for a, _, _ in BOUNDED])
+def test_bounded_inputs(tmp_path, bad, run, monkeypatch, args, files, words):
+    monkeypatch.chdir(tmp_path)
+    Path("m.toml").write_text(_MESH_TOML)
+    for name, make in files.items():
+        make(tmp_path / name)
+    if words is None:  # an input that used to fail: it works
+        code, _, err = run(*args)
+        assert code == 0, err
+    else:
+        assert words in bad(*args, "--out", tmp_path / "o") if args[0] in ("design", "net", "stl") else words in bad(
+            *args)  # fmt: skip
+
+
+def test_a_mesh_with_nan_vertices_says_so(tmp_path, bad):
+    import trimesh
+
+    box = trimesh.creation.box((2, 2, 2))
+    box.vertices[0] = np.nan
+    box.export(tmp_path / "m.stl")
+    (tmp_path / "m.toml").write_text(_MESH_TOML)
+    assert "NaN or infinite coordinates" in bad("predict", tmp_path / "m.toml")
+
+
+def test_a_hull_of_too_many_faces_is_refused_fast(tmp_path, bad):
+    import trimesh
+
+    trimesh.creation.icosphere(subdivisions=6).export(tmp_path / "s.stl")  # 81,920 faces: minutes and gigabytes
+    (tmp_path / "s.toml").write_text('name = "s"\nfamily = "mesh"\ntarget = "uniform:6"\nmesh = "s.stl"\n')
+    assert "simplify the mesh" in bad("predict", tmp_path / "s.toml")
+
+
+def test_an_svg_symbol_of_too_many_points_is_refused(tmp_path, bad):
+    pytest.importorskip("svgelements")
+    path = " ".join(f"L {i % 100} {i // 100 % 2}" for i in range(60_000))
+    (tmp_path / "big.svg").write_text(f'<svg xmlns="http://www.w3.org/2000/svg"><path d="M 0 0 {path} Z"/></svg>')
+    design = tomllib.loads(Path(str(template_path("d6"))).read_text())
+    design["labels"] = {"f1": "svg:big.svg"}
+    (tmp_path / "d.toml").write_text(tomli_w.dumps(design))
+    line = bad("net", tmp_path / "d.toml", "--out", tmp_path / "o")
+    assert "more than" in line and "big.svg" in line
+
+
+@pytest.mark.parametrize("name", ["{x}[/bold]", "[link=file:///etc/passwd]x[/link]", "[bold red]z"])
+def test_names_are_printed_as_they_are(tmp_path, run, name):
+    design = dict(GEM, name=name)
+    (tmp_path / "d.toml").write_text(tomli_w.dumps(design))
+    code, out, err = run("predict", tmp_path / "d.toml")
+    assert code == 0, err
+    assert out.splitlines()[0].startswith(name)
+
+
+def test_a_needle_mesh_is_one_line_in_net(tmp_path, bad):
+    import trimesh
+
+    trimesh.creation.box((2, 0.002, 0.002)).export(tmp_path / "m.stl")
+    (tmp_path / "m.toml").write_text(_MESH_TOML)
+    assert "wide enough for it to rest on" in bad("net", tmp_path / "m.toml", "--out", tmp_path / "o")

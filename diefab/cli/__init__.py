@@ -44,22 +44,16 @@ for _command in (templates, predict, stats, design, optimize, validate, calibrat
 MESSAGE_MAX = 1000
 
 
-def _terminate(signum, frame) -> None:
-    raise KeyboardInterrupt  # a kill (SIGTERM) or hang-up (SIGHUP) stops a run as cleanly as Ctrl-C
-
-
 def main(argv: list[str] | None = None) -> None:
     """Console entry point: one-line errors, exit status 2 on bad input."""
     import signal
-    import threading
     import warnings
 
-    caught = {}
-    if threading.current_thread() is threading.main_thread():
-        for name in ("SIGTERM", "SIGHUP"):
-            signum = getattr(signal, name, None)
-            if signum is not None and signal.getsignal(signum) is signal.SIG_DFL:
-                caught[signum] = signal.signal(signum, _terminate)
+    from diefab.core import stopping
+    from diefab.core.files import release_locks
+
+    stopping.reset()
+    caught = stopping.install()  # a kill (SIGTERM) or hang-up (SIGHUP) stops a run as cleanly as Ctrl-C
     try:
         with warnings.catch_warnings():
             shown: set[str] = set()
@@ -74,6 +68,7 @@ def main(argv: list[str] | None = None) -> None:
             warnings.showwarning = show
             _main(argv)
     finally:
+        release_locks()
         for signum, previous in caught.items():
             signal.signal(signum, previous)
 
@@ -98,16 +93,36 @@ def _silence_stdout() -> None:
         pass
 
 
+def _interrupted() -> None:
+    click.echo("diefab: interrupted", err=True)
+    sys.exit(130)
+
+
 def _main(argv: list[str] | None) -> None:
+    from diefab.core.stopping import check_stop, stop_requested
+
     try:
         rv = cli.main(args=argv, prog_name="diefab", standalone_mode=False)
+        if not rv:  # a command that succeeded after a stop whose exception something swallowed: still a stop
+            check_stop()
         sys.stdout.flush()
+    except SystemExit:  # the command's own exit (an interrupted run that said how to resume)
+        raise
+    except BaseException as exc:
+        if stop_requested() and not isinstance(exc, (KeyboardInterrupt, click.exceptions.Exit)):  # a swallowed stop
+            _interrupted()
+        _fail(exc)
+    sys.exit(rv if isinstance(rv, int) else 0)
+
+
+def _fail(exc: BaseException) -> None:
+    try:
+        raise exc
     except BrokenPipeError:  # the reader went away (``diefab templates | head -1``): stop quietly, as click does
         _silence_stdout()
         sys.exit(1)
     except (click.exceptions.Abort, KeyboardInterrupt):
-        click.echo("diefab: interrupted", err=True)
-        sys.exit(130)
+        _interrupted()
     except click.exceptions.Exit as exc:
         sys.exit(exc.exit_code)
     except click.ClickException as exc:
@@ -130,4 +145,3 @@ def _main(argv: list[str] | None) -> None:
         if os.environ.get("DIEFAB_DEBUG"):
             raise
         error(f"internal error: {type(exc).__name__}: {exc} (set DIEFAB_DEBUG=1 for a traceback)", status=1)
-    sys.exit(rv if isinstance(rv, int) else 0)

@@ -8,8 +8,11 @@ import click
 import numpy as np
 
 from diefab.cli.common import (
+    BOLD,
+    PLAIN,
     check_resume_folder,
     console,
+    design_inputs,
     emit_json,
     get_design,
     json_option,
@@ -18,7 +21,7 @@ from diefab.cli.common import (
     refuse_options,
     run_logged,
 )
-from diefab.core.files import atomic_write, check_outputs, output_path
+from diefab.core.files import atomic_write, check_outputs, output_path, safe_name
 from diefab.search.calibrate import DEFAULT_FREE
 
 
@@ -38,6 +41,24 @@ def _parse_bounds(items: tuple[str, ...]) -> dict[str, tuple[float, float]]:
             raise click.BadParameter(f"{name.strip()} is bounded twice", param_hint="--bound")
         out[name.strip()] = bound
     return out
+
+
+def _inputs(die_args, realrolls, physics_profile) -> list[Path]:
+    """The files a fresh calibration reads: designs and their meshes and symbols, roll logs, real rolls, profile."""
+    from diefab.core.errors import DiefabError
+    from diefab.dice.design import load_design
+
+    files = [Path(p) for p in realrolls]
+    for spec, counts in die_args:
+        try:
+            files += design_inputs(spec, load_design(spec))
+        except DiefabError:  # reported when the die is read
+            files += [Path(spec)] if Path(spec).is_file() else []
+        if Path(counts).is_file():
+            files.append(Path(counts))
+    if physics_profile is not None and Path(physics_profile).is_file():
+        files.append(Path(physics_profile))
+    return files
 
 
 def _dice(die_args, realrolls):
@@ -110,6 +131,8 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
     resumed with --resume OUT/NAME; the profile OUT/NAME/NAME.toml is what
     validate and optimize take with --physics.
     """
+    from dataclasses import replace
+
     from diefab.physics.profiles import load_profile
     from diefab.physics.simulate import PhysicsSettings
     from diefab.search.calibrate import CalibrationError, CalibrationLog, make_spec
@@ -134,9 +157,11 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
     warning = None
     if resume is not None:
         log = CalibrationLog(resume)
+        log.lock()
         spec = log.spec()
         check_resume_folder(ctx, resume, out_dir)
-        if ctx.get_parameter_source("name").name == "COMMANDLINE" and name != Path(resume).resolve().name:
+        run_name = safe_name(Path(resume).resolve().name)
+        if ctx.get_parameter_source("name").name == "COMMANDLINE" and name != run_name:
             raise click.UsageError(f"--name {name} differs from the folder of --resume {resume}", ctx=ctx)
         stored = {"seed": seed, "sims_per_eval": sims_per_eval, "method": method, "grid_points": grid_points,
                   "sigma0": sigma, "max_sims": max_sims_per_eval}  # fmt: skip
@@ -152,20 +177,33 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
             if source is not None and source.name == "COMMANDLINE":
                 raise RunError(f"a resumed run keeps the dice and settings stored in {log.spec_path}: leave out {flag}")
         history, warning = log.read()
-        run_name = Path(resume).name
+        inputs = [path for die in spec.real_dice for path in design_inputs("", die.design)]
+        check_outputs([output_path(log.folder, run_name, ".toml")], inputs)  # refused now, not at the first best
+        changed = {}
+        if ctx.get_parameter_source("budget").name == "COMMANDLINE" or spec.budget_minutes is None:
+            changed["budget_minutes"] = float(budget)
+        if max_evals is not None:
+            changed["max_evaluations"] = max_evals
+        if changed and any(getattr(spec, k) != v for k, v in changed.items()):
+            spec = replace(spec, **changed)
+            log.update(spec)
     else:
         if not die_args and not realrolls:
             raise CalibrationError("give at least one die with real rolls: --die DESIGN COUNTS or --realrolls FILE")
+        run_name = name
+        log = CalibrationLog(output_path(out_dir, run_name, ""))
+        inputs = _inputs(die_args, realrolls, physics_profile)
+        # every output, the profile too: refused now, not at the first best
+        check_outputs([log.spec_path, log.path, log.identity_path, output_path(log.folder, run_name, ".toml")], inputs)
         dice = _dice(die_args, realrolls)
         names = [n.strip() for n in free.split(",") if n.strip()]
         base = load_profile(physics_profile) if physics_profile else PhysicsSettings()
         spec = make_spec(dice, free=names, base=base, bounds=_parse_bounds(bounds), seed=seed,
                          sims_per_eval=sims_per_eval, max_sims=max_sims_per_eval or 8 * sims_per_eval, method=method,
-                         sigma0=sigma, grid_points=grid_points)  # fmt: skip
-        run_name = name
-        log = CalibrationLog(output_path(out_dir, run_name, ""))
+                         sigma0=sigma, grid_points=grid_points, budget_minutes=float(budget),
+                         max_evaluations=max_evals)  # fmt: skip
         history = []
-    check_outputs([output_path(log.folder, run_name, ".toml")])  # the profile: refused now, not at the first best
+    budget, max_evals = spec.budget_minutes, spec.max_evaluations
     client = None
     if scheduler is not None:  # before the run folder exists: a wrong address leaves nothing behind
         from diefab.physics.simulate import dask_client
@@ -175,10 +213,10 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
         log.create(spec)
     if warning:
         click.echo(f"diefab: warning: {warning}", err=True)
-    run(spec, log, run_name, history, budget, max_evals, workers, client, as_json, fresh=resume is None)
+    run(spec, log, run_name, history, budget, max_evals, workers, client, as_json, fresh=resume is None, inputs=inputs)
 
 
-def run(spec, log, run_name, history, budget, max_evals, workers, client, as_json, fresh=False) -> None:
+def run(spec, log, run_name, history, budget, max_evals, workers, client, as_json, fresh=False, inputs=()) -> None:
     """Run or continue the calibration in `log`; write the profile as it improves; print the report.
 
     `client` is a Dask client or None (local workers).  A `fresh` run that fails before its first
@@ -210,7 +248,7 @@ def run(spec, log, run_name, history, budget, max_evals, workers, client, as_jso
         settings = spec.settings(record["x"])
         text = profile_to_toml(settings, name=run_name, calibration=summary(record), comment=f"Written by: {command}",
                                description=f"physics calibrated to the real rolls of {names}")  # fmt: skip
-        atomic_write(profile_path, text)
+        atomic_write(profile_path, text, inputs=inputs)
         if update:
             update(best=record)
 
@@ -272,7 +310,7 @@ def print_report(report) -> None:
     from rich.table import Table
 
     con = console()
-    con.print(f"[bold]{report['name']}[/bold]: deviance {report['deviance']:.2f} "
+    con.print(f"{BOLD}{report['name']}{PLAIN}: deviance {report['deviance']:.2f} "
               f"({report['deviance_per_roll']:.4f} per roll) at {report['drops_per_die']} drops per die"
               + ("" if report["start_deviance"] is None else
                  f"; at the start {report['start_deviance']:.2f} ({report['start_drops_per_die']} drops)"))  # fmt: skip

@@ -12,11 +12,29 @@ import numpy as np
 from diefab.core.errors import OutputError
 from diefab.dice.design import Design, load_design
 
+#: Start and end of bold in text printed through :func:`console` (control characters no name may hold).
+BOLD, PLAIN = "\x01", "\x02"
+
 
 def console(stderr: bool = False):
-    from rich.console import Console
+    """A rich console that prints every string as it is: no markup from names, paths or values.
 
-    return Console(stderr=stderr, highlight=False, soft_wrap=True)
+    Rich reads ``[...]`` as markup, so a design named ``{x}[/bold]`` would
+    fail and ``[link=file:///etc/passwd]`` would become a link.  Strings are
+    escaped; the only styling is bold between :data:`BOLD` and :data:`PLAIN`.
+    Table cells are plain text too (markup is off).
+    """
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.text import Text
+
+    class PlainConsole(Console):
+        def print(self, *objects, **kwargs) -> None:
+            texts = [Text.from_markup(escape(o).replace(BOLD, "[bold]").replace(PLAIN, "[/bold]"))
+                     if isinstance(o, str) else o for o in objects]  # fmt: skip
+            super().print(*texts, **kwargs)
+
+    return PlainConsole(stderr=stderr, highlight=False, soft_wrap=True, markup=False)
 
 
 def emit_json(obj: Any) -> None:
@@ -102,6 +120,18 @@ def design_inputs(spec: str, design: Design) -> list[Path]:
     return files
 
 
+#: Sizes of a die the commands that make one accept, millimetres (a marble to a beach ball).
+SIZE_RANGE_MM = (1.0, 1000.0)
+
+
+def check_size(size_mm: float | None) -> None:
+    """Refuse a ``--size`` outside :data:`SIZE_RANGE_MM` (None: the design's own)."""
+    lo, hi = SIZE_RANGE_MM
+    if size_mm is not None and not (np.isfinite(size_mm) and lo <= size_mm <= hi):
+        raise click.BadParameter(f"{size_mm:g} mm is outside [{lo:g}, {hi:g}] mm, the sizes of dice diefab makes",
+                                 param_hint="--size")  # fmt: skip
+
+
 def refuse_options(ctx: click.Context, names: list[str], why: str) -> None:
     """Raise a usage error if any of the named parameters was given on the command line."""
     for name in names:
@@ -134,9 +164,9 @@ def free_parameters(design: Design, free: str | None) -> list[str] | None:
 
 
 def heading(design: Design, **settings: object) -> str:
-    """``[bold]name[/bold]  a=1.18 b=0.52 ...  key=value ...``: the first line of a human report."""
+    """``name`` (bold) ``  a=1.18 b=0.52 ...  key=value ...``: the first line of a human report."""
     params = " ".join(f"{k}={v:g}" for k, v in design.params.items())
-    return "  ".join([f"[bold]{design.name}[/bold]", params, *(f"{k}={v}" for k, v in settings.items())])
+    return "  ".join([f"{BOLD}{design.name}{PLAIN}", params, *(f"{k}={v}" for k, v in settings.items())])
 
 
 def values_dict(design: Design, probs: np.ndarray) -> dict[str, float]:

@@ -10,8 +10,11 @@ import click
 import numpy as np
 
 from diefab.cli.common import (
+    BOLD,
     FILL_OPTIONS,
+    PLAIN,
     check_fill_options,
+    check_size,
     console,
     emit_json,
     fill_options,
@@ -99,6 +102,7 @@ def design(target, faces, family_name, model, budget, name, seed, size_mm, min_m
         raise click.BadParameter(f"{budget} must be a positive number of minutes", param_hint="--budget")
     if not (np.isfinite(size_mm) and size_mm > 0):
         raise click.BadParameter(f"{size_mm} must be a positive number of millimetres", param_hint="--size")
+    check_size(size_mm)
     if not (np.isfinite(min_margin) and min_margin >= 0):
         raise click.BadParameter(f"{min_margin} must be a non-negative number", param_hint="--min-margin")
     if name is not None and not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9._-]{0,99}", name):
@@ -187,7 +191,7 @@ def _print_report(d, report: dict, path: Path) -> None:
     from diefab.dice.design import format_value
 
     con = console()
-    con.print(f"[bold]{d.name}[/bold]  family {d.family}  " + " ".join(f"{k}={v:.4g}" for k, v in d.params.items()))
+    con.print(f"{BOLD}{d.name}{PLAIN}  family {d.family}  " + " ".join(f"{k}={v:.4g}" for k, v in d.params.items()))
     con.print(_METHOD[report["method"]])
     table = Table("value", "rests on", "predicted", "target", title=f"Values, {report['model']} model",
                   title_justify="left")  # fmt: skip

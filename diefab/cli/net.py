@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from diefab.cli.common import (
+    check_size,
     design_argument,
     design_inputs,
     emit_json,
@@ -53,6 +54,8 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
 
     kinds = parse_formats(formats)
     sheet = parse_page(page)
+    if size_mm is not None and size_mm > 0:  # zero and negative sizes: the library's message
+        check_size(size_mm)
     d = get_design(design, params)
     size = d.size_mm if size_mm is None else size_mm
     ensure_dir(out_dir)

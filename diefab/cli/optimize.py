@@ -9,6 +9,8 @@ import click
 import numpy as np
 
 from diefab.cli.common import (
+    BOLD,
+    PLAIN,
     apply_fill,
     check_resume_folder,
     console,
@@ -134,7 +136,7 @@ def optimize(ctx, design, params, model, target, seed, min_margin, starts, free,
         return
     con = console()
     con.print(
-        f"[bold]{best.name}[/bold]  "
+        f"{BOLD}{best.name}{PLAIN}  "
         + " ".join(f"{k}={v:.4f}" for k, v in best.params.items())
         + f"\n{objective} = {result.objective:.5f} under the {model} model "
         f"({result.evaluations} evaluations from {result.starts} starts)"
@@ -204,12 +206,18 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
     """``diefab optimize DESIGN --model simulation``: see :mod:`diefab.search.simopt`."""
     from diefab.dice.design import design_to_toml
     from diefab.dice.families import family
+    from diefab.search.runid import pinned_toml
     from diefab.search.simopt import RunError, RunLog, RunSpec, best_design, optimize_by_simulation, start_point
 
     if not (np.isfinite(budget) and budget > 0):
         raise click.BadParameter(f"{budget} must be a positive number of minutes", param_hint="--budget")
     if sims_per_eval <= 0:
         raise click.BadParameter(f"{sims_per_eval} must be > 0", param_hint="--sims-per-eval")
+    from diefab.physics.simulate import MAX_DROPS
+
+    for value, hint in ((sims_per_eval, "--sims-per-eval"), (max_sims_per_eval, "--max-sims-per-eval")):
+        if value is not None and value > MAX_DROPS:
+            raise click.BadParameter(f"{value} must be at most {MAX_DROPS:,} drops", param_hint=hint)
     if resume is None and max_sims_per_eval is not None and max_sims_per_eval < sims_per_eval:  # else: stored
         raise click.BadParameter(f"{max_sims_per_eval} must be >= --sims-per-eval", param_hint="--max-sims-per-eval")
     if max_evals is not None and max_evals <= 0:
@@ -233,6 +241,7 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         refuse_options(ctx, ["name", "starts", "params"],
                        "does not apply with --resume (the run's design and start are in its run.json)")  # fmt: skip
         log = RunLog(resume)
+        log.lock()
         spec = log.spec()
         check_resume_folder(ctx, resume, out_dir)
         stored = spec.design
@@ -286,7 +295,7 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         x0 = start_point(d, names, model=start_model, objective=objective, min_margin=min_margin, starts=starts,
                          seed=seed)  # fmt: skip
         spec = RunSpec(
-            design_toml=design_to_toml(d), names=tuple(names), x0=tuple(float(v) for v in x0), objective=objective,
+            design_toml=pinned_toml(d), names=tuple(names), x0=tuple(float(v) for v in x0), objective=objective,
             min_margin=float(min_margin), seed=seed, sims_per_eval=sims_per_eval,
             max_sims=max_sims_per_eval or 16 * sims_per_eval, method=method, sigma0=sigma,
             physics=physics.as_dict(), start=start_model, robust=throws, budget_minutes=float(budget),
@@ -360,7 +369,7 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         return
     con = console()
     con.print(
-        f"[bold]{run_name}[/bold]  "
+        f"{BOLD}{run_name}{PLAIN}  "
         + " ".join(f"{k}={v:.4f}" for k, v in best["params"].items())
         + f"\n{spec.objective} = {best['objective']:.5f} at {best['drops']} drops (seed {spec.seed}); "
         f"{result.evaluations} evaluations ({result.replayed} replayed), {report['drops']:,} drops; "

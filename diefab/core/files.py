@@ -28,8 +28,28 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 from diefab.core.errors import OutputError
+from diefab.core.stopping import STOP_SIGNALS, check_stop
 
-__all__ = ["NAME_MAX", "atomic_write", "check_outputs", "ensure_dir", "output_path", "safe_name", "write_files"]
+
+class LockError(OutputError):
+    """Another process holds the lock of a run folder or of an output file."""
+
+
+__all__ = [
+    "NAME_MAX",
+    "ExclusiveLock",
+    "LockError",
+    "atomic_write",
+    "check_outputs",
+    "check_size",
+    "ensure_dir",
+    "hold_lock",
+    "hold_outputs",
+    "output_path",
+    "release_locks",
+    "safe_name",
+    "write_files",
+]
 
 #: Longest file name, in bytes, that common file systems accept.
 NAME_MAX = 255
@@ -66,6 +86,21 @@ def output_path(folder: str | Path, name: str, suffix: str) -> Path:
     return Path(folder) / filename
 
 
+def check_size(path: str | Path, limit: int, what: str, error: type[Exception] = OutputError) -> None:
+    """Raise `error` if the file `path` is larger than `limit` bytes (its apparent size: a sparse file counts whole).
+
+    Inputs go through this before they are read, so that memory stays
+    bounded whatever the file; a file that cannot be inspected is left to
+    the reader's own error.
+    """
+    try:
+        size = os.stat(path).st_size
+    except (OSError, ValueError):
+        return
+    if size > limit:
+        raise error(f"{what} {path} is {size:,} bytes, more than the {limit:,} any die needs")
+
+
 def ensure_dir(path: str | Path) -> Path:
     """Create folder `path` if needed and check that it is writable."""
     path = Path(path)
@@ -81,10 +116,6 @@ def ensure_dir(path: str | Path) -> Path:
     if not os.access(path, os.W_OK | os.X_OK):
         raise OutputError(f"output folder {path} is not writable")
     return path
-
-
-#: The signals that stop a command (the command line turns each into a clean exit).
-STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
 
 
 @contextlib.contextmanager
@@ -117,6 +148,149 @@ def signals_deferred():
             signal.raise_signal(signum)
 
 
+class ExclusiveLock:
+    """An exclusive advisory lock on ``FOLDER/.NAME.lock`` for the file or folder ``FOLDER/NAME``.
+
+    Taken without waiting: when another process holds it, :meth:`acquire`
+    raises :class:`LockError` naming that process's id, which the holder
+    writes into the lock file.  The lock is the operating system's (``flock``
+    on POSIX, through the `filelock` package elsewhere), so it ends with the
+    process however the process ends; a lock file left by a killed process
+    is taken over.  :meth:`release` removes the lock file while still
+    holding it, and :meth:`acquire` checks that the file it locked is still
+    the one at the path, so that no two processes can both hold it.
+
+    Parameters
+    ----------
+    target : path
+        The run folder or output file guarded.
+    what : str
+        Words for the refusal, e.g. ``"run out/r"``.
+    """
+
+    def __init__(self, target: str | Path, what: str) -> None:
+        target = Path(os.path.abspath(target))
+        self.path = target.parent / f".{_short(target)}.lock"
+        self.what = what
+        self._fd: int | None = None
+        self._other = None
+
+    @property
+    def held(self) -> bool:
+        return self._fd is not None or self._other is not None
+
+    def acquire(self) -> ExclusiveLock:
+        if self.held:
+            return self
+        try:
+            import fcntl
+        except ImportError:  # no flock: filelock's own (without the holder's id)
+            return self._acquire_portable()
+        while True:
+            try:
+                fd = os.open(self.path, os.O_RDWR | os.O_CREAT | getattr(os, "O_CLOEXEC", 0), 0o644)
+            except OSError as exc:
+                raise OutputError(f"cannot lock {self.what} ({self.path}): {exc.strerror or exc}") from exc
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                holder = _read_pid(fd)
+                os.close(fd)
+                who = f"process {holder}" if holder else "another process"
+                raise LockError(f"{self.what} is in use by {who} (lock {self.path})") from None
+            try:
+                same = os.path.samestat(os.fstat(fd), os.stat(self.path))
+            except OSError:
+                same = False
+            if not same:  # the holder released (and removed) it between our open and our lock: again
+                os.close(fd)
+                continue
+            try:
+                os.ftruncate(fd, 0)
+                os.write(fd, f"{os.getpid()}\n".encode())
+            except OSError:
+                pass  # a full disk: the lock holds, only the holder's id is not recorded
+            self._fd = fd
+            return self
+
+    def _acquire_portable(self) -> ExclusiveLock:
+        import filelock
+
+        lock = filelock.FileLock(str(self.path), timeout=0)
+        try:
+            lock.acquire()
+        except filelock.Timeout:
+            raise LockError(f"{self.what} is in use by another process (lock {self.path})") from None
+        self._other = lock
+        return self
+
+    def release(self) -> None:
+        if self._other is not None:
+            self._other.release()
+            self._other = None
+        if self._fd is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(self.path)
+            os.close(self._fd)
+            self._fd = None
+
+    def __enter__(self) -> ExclusiveLock:
+        return self.acquire()
+
+    def __exit__(self, *exc) -> None:
+        self.release()
+
+
+#: Output locks this process keeps until :func:`release_locks` (taken by :func:`check_outputs`).
+_HELD: dict[Path, ExclusiveLock] = {}
+
+
+def _output_locks(targets: Iterable[str | Path]) -> list[ExclusiveLock]:
+    """Locks of the `targets` this process does not hold yet, in a fixed order (no two writers deadlock)."""
+    locks = []
+    for target in sorted({os.path.abspath(p) for p in targets}):
+        lock = ExclusiveLock(target, f"output {target}")
+        if lock.path not in _HELD and os.path.isdir(lock.path.parent):  # a missing folder is made later
+            locks.append(lock)
+    return locks
+
+
+def hold_outputs(targets: Iterable[str | Path]) -> None:
+    """Lock the output files `targets` until :func:`release_locks`: a second writer of them is refused."""
+    for lock in _output_locks(targets):
+        _HELD[lock.path] = lock.acquire()
+
+
+def hold_lock(target: str | Path, what: str) -> None:
+    """Lock `target` (a run folder, say) until :func:`release_locks`; refuse it if another process holds it."""
+    lock = ExclusiveLock(target, what)
+    if lock.path not in _HELD:
+        _HELD[lock.path] = lock.acquire()
+
+
+def release_locks() -> None:
+    """Release the output locks taken by :func:`hold_outputs` (and :func:`check_outputs`)."""
+    while _HELD:
+        _HELD.popitem()[1].release()
+
+
+def _read_pid(fd: int) -> int | None:
+    try:
+        text = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
+    except (OSError, AttributeError):
+        return None
+    return int(text) if text.isdigit() else None
+
+
+def _release_at_exit() -> None:
+    import atexit
+
+    atexit.register(release_locks)
+
+
+_release_at_exit()
+
+
 def atomic_write(path: str | Path, data: str | bytes, *, inputs: Iterable[str | Path] = ()) -> Path:
     """Write `data` to `path` through a temporary file in the same folder and a rename."""
     return write_files({path: data}, inputs=inputs)[0]
@@ -147,8 +321,18 @@ def write_files(files: Mapping[str | Path, str | bytes], *, inputs: Iterable[str
     delivered just after, so that an interrupt leaves the targets all old or
     all new and no temporary file behind.
     """
+    check_stop()  # a stop received (and swallowed by someone) before: nothing is written
     with signals_deferred():
-        return _write_files(files, inputs)
+        taken = _output_locks(files)
+        try:
+            for lock in taken:
+                _HELD[lock.path] = lock.acquire()
+            return _write_files(files, inputs)
+        finally:
+            for lock in taken:
+                if _HELD.get(lock.path) is lock:
+                    del _HELD[lock.path]
+                lock.release()
 
 
 def _write_files(files: Mapping[str | Path, str | bytes], inputs: Iterable[str | Path]) -> list[Path]:
@@ -204,9 +388,13 @@ def check_outputs(targets: Iterable[str | Path], inputs: Iterable[str | Path] = 
 
     Commands call this before their long work, so that a refusal comes
     first, not after minutes of computing; :func:`write_files` checks again.
+    The targets are locked (:func:`hold_outputs`) until :func:`release_locks`,
+    so that two processes cannot write the same set of files.
     """
+    targets = [Path(p) for p in targets]
     sources = [Path(p) for p in inputs if p is not None]
-    for path in map(Path, targets):
+    hold_outputs(targets)
+    for path in targets:
         if path.is_dir() or (path.exists() and not path.is_file()):
             raise OutputError(f"cannot write {path}: it exists and is not a regular file")
         for source in sources:

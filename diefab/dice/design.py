@@ -28,6 +28,7 @@ import numpy as np
 
 from diefab.core import tolerances as tol
 from diefab.core.errors import DesignError, GeometryError
+from diefab.core.files import check_size
 from diefab.dice.families import family
 from diefab.dice.families.base import default_length
 from diefab.dice.schema import check_design_data, check_mapping
@@ -39,6 +40,9 @@ from diefab.made.bodies import body_properties
 from diefab.made.fill import Fill
 from diefab.made.mass import mesh_mass_properties
 from diefab.made.placement import LabelPlan
+
+#: Largest design file read, bytes (a convex die of a thousand faces is under a megabyte).
+DESIGN_MAX_BYTES = 16 << 20
 
 __all__ = [
     "Design",
@@ -528,7 +532,8 @@ def load_design(spec: str | Path) -> Design:
         if path.stat().st_size > MAX_DESIGN_BYTES:
             raise DesignError(f"design file {text} is larger than {MAX_DESIGN_BYTES >> 20} MiB")
         try:
-            content = path.read_text(encoding="utf-8")
+            check_size(path, DESIGN_MAX_BYTES, "design file", DesignError)
+            content = path.read_text(encoding="utf-8-sig")  # a byte-order mark is not TOML
         except (OSError, UnicodeDecodeError) as exc:
             raise DesignError(f"cannot read design file {text}: {exc}") from exc
         return parse_design(content, source=text, base=path.parent)

@@ -76,6 +76,8 @@ __all__ = [
     "mesh_moments",
 ]
 
+#: Smallest edge rounding, mm (a printer resolves about 0.05 mm).
+MIN_ROUND_MM = 0.01
 #: Segments of the spheres that round edges and corners.
 ROUND_SEGMENTS = 32
 
@@ -505,6 +507,8 @@ def _check_settings(**values: float | None) -> None:
         raise FabricationError(f"depth={values['depth_mm']:g} mm must be positive")
     if values["round_mm"] < 0:
         raise FabricationError(f"round={values['round_mm']:g} mm must be >= 0")
+    if 0 < values["round_mm"] < MIN_ROUND_MM:  # finer than any printer, and too fine for a sound boolean
+        raise FabricationError(f"round={values['round_mm']:g} mm must be 0 (sharp) or at least {MIN_ROUND_MM:g} mm")
     if values["density_g_cm3"] <= 0:
         raise FabricationError(f"density={values['density_g_cm3']:g} g/cm³ must be positive")
     if values["min_text_height_mm"] <= 0 or values["min_stroke_mm"] <= 0 or values["margin_mm"] < 0:

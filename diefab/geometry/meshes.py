@@ -25,6 +25,28 @@ import numpy as np
 from diefab.core import tolerances as tol
 from diefab.core.errors import GeometryError
 
+#: Largest mesh file read, bytes (a finely scanned die is a few megabytes).
+MAX_MESH_BYTES = 128 << 20
+#: Most triangles of a mesh read.
+MAX_MESH_TRIANGLES = 1_000_000
+
+
+def _check_stl(path: Path, size: int) -> None:
+    """Refuse a binary STL whose triangle count disagrees with its size (trimesh would misread it)."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(84)
+    except OSError as exc:
+        raise GeometryError(f"cannot read mesh {path}: {exc.strerror or exc}") from None
+    if len(head) == 84 and size == 84 + 50 * int.from_bytes(head[80:84], "little"):
+        return  # a binary STL of the size it says
+    if head.lstrip()[:5].lower() == b"solid":
+        return  # ASCII
+    count = int.from_bytes(head[80:84], "little") if len(head) == 84 else 0
+    raise GeometryError(f"mesh {path} is not an STL file: a binary STL of {count:,} triangles would be "
+                        f"{84 + 50 * count:,} bytes, not {size:,} (cut short or corrupt?)")  # fmt: skip
+
+
 __all__ = ["ClosedMesh"]
 
 
@@ -68,11 +90,26 @@ class ClosedMesh:
 
         path = Path(path)
         try:
-            mesh = trimesh.load(path, force="mesh", process=True)
+            size = path.stat().st_size
+        except OSError as exc:
+            raise GeometryError(f"cannot read mesh {path}: {exc.strerror or exc}") from None
+        if size > MAX_MESH_BYTES:
+            raise GeometryError(f"mesh {path} is {size:,} bytes, more than the {MAX_MESH_BYTES >> 20} MiB of any die's "
+                                "mesh")  # fmt: skip
+        if path.suffix.lower() == ".stl":
+            _check_stl(path, size)
+        try:
+            mesh = trimesh.load(path, force="mesh", process=False)
         except Exception as exc:  # trimesh raises many types for unreadable files
             raise GeometryError(f"cannot read mesh {path}: {exc}") from exc
         if not isinstance(mesh, trimesh.Trimesh):
             raise GeometryError(f"mesh {path} holds no triangles")
+        if len(mesh.faces) > MAX_MESH_TRIANGLES:
+            raise GeometryError(f"mesh {path} has {len(mesh.faces):,} triangles, more than the "
+                                f"{MAX_MESH_TRIANGLES:,} diefab reads: simplify it")  # fmt: skip
+        if not np.all(np.isfinite(mesh.vertices)):  # before processing, which would drop them and open the surface
+            raise GeometryError(f"mesh {path} has NaN or infinite coordinates")
+        mesh.process()
         return cls.from_trimesh(mesh, source=f"mesh {path}")
 
     def scaled(self, factor: float) -> ClosedMesh:

@@ -29,6 +29,11 @@ import numpy as np
 from diefab.core import tolerances as tol
 from diefab.core.errors import GeometryError
 
+#: Most triangles of a convex hull read (a die's hull, even a rounded scan's, has a few thousand).
+MAX_HULL_TRIANGLES = 50_000
+#: Most faces of a polyhedron (after merging coplanar triangles): the models scale with the faces squared.
+MAX_FACES = 5_000
+
 __all__ = [
     "Polyhedron",
     "face_margins",
@@ -136,6 +141,9 @@ class Polyhedron:
             raise GeometryError("points are degenerate (coplanar, collinear or coincident)") from exc
         if hull.volume <= tol.VOLUME * max(1.0, np.ptp(pts, axis=0).max() ** 3):
             raise GeometryError("points span no volume")
+        if len(hull.simplices) > MAX_HULL_TRIANGLES:
+            raise GeometryError(f"the convex hull has {len(hull.simplices):,} triangles, more than the "
+                                f"{MAX_HULL_TRIANGLES:,} a die's hull needs: simplify the mesh")  # fmt: skip
         if merge_tolerance is not None and merge_tolerance > 0:
             if strict and len(hull.vertices) != len(pts):
                 missing = sorted(set(range(len(pts))) - set(hull.vertices.tolist()))
@@ -145,6 +153,9 @@ class Polyhedron:
                 )
             return cls.from_points(_merged_hull(pts, hull, merge_tolerance), strict=False)
         faces = _merge_coplanar(pts, hull.simplices, hull.equations)
+        if len(faces) > MAX_FACES:
+            raise GeometryError(f"the convex hull has {len(faces):,} faces, more than the {MAX_FACES:,} diefab "
+                                "models: simplify the mesh or give it a larger merge tolerance")  # fmt: skip
         used = sorted({int(i) for f in faces for i in f})
         if strict and len(used) != len(pts):
             missing = sorted(set(range(len(pts))) - set(used))

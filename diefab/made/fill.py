@@ -20,6 +20,7 @@ __all__ = [
     "KINDS",
     "LABEL_DEPTH_MM",
     "LINE_WIDTH_FACTOR",
+    "MIN_LAYER_MM",
     "TAB_MAX_FRACTION",
     "TAB_TOP_FRACTION",
     "Fill",
@@ -31,6 +32,8 @@ __all__ = [
 CARD_DENSITY = 0.8
 #: Extrusion width of a line as a multiple of the nozzle diameter (PrusaSlicer's automatic width).
 LINE_WIDTH_FACTOR = 1.125
+#: Thinnest print layer (and nozzle), mm: the modelled layers are counted, so memory grows as 1 / layer.
+MIN_LAYER_MM = 0.01
 #: Engraving depth of the labels in the print model of a design, mm (``diefab stl``'s default).
 LABEL_DEPTH_MM = 0.6
 #: A tab is never wider than this fraction of its edge ("about half the edge").
@@ -123,9 +126,9 @@ class Fill:
                 raise DesignError(f"fill {name}={getattr(self, name)!r} must be true or false")
         _number("tab_mm", self.tab_mm, 0, 50, "mm", lo_open=False)
         _number("glue_g_m2", self.glue_g_m2, 0, 500, "g/m²", lo_open=False)
-        _number("nozzle_mm", self.nozzle_mm, 0, 2, "mm")
+        _number("nozzle_mm", self.nozzle_mm, MIN_LAYER_MM, 2, "mm", lo_open=False)
         _number("perimeters", self.perimeters, 1, 20, "", lo_open=False, integer=True)
-        _number("layer_mm", self.layer_mm, 0, self.nozzle_mm, "mm (at most the nozzle)")
+        _number("layer_mm", self.layer_mm, MIN_LAYER_MM, self.nozzle_mm, "mm (at most the nozzle)", lo_open=False)
         _number("top_layers", self.top_layers, 0, 50, "", lo_open=False, integer=True)
         _number("bottom_layers", self.bottom_layers, 0, 50, "", lo_open=False, integer=True)
         _number("infill", self.infill, 0, 1, "", lo_open=False)

@@ -30,7 +30,13 @@ import math
 import numpy as np
 
 from diefab.core.errors import FabricationError
+from diefab.core.files import check_size
 from diefab.made.text import CURVE_STEPS, Font, ambiguous, nest_rings, text_polygons
+
+#: Largest SVG symbol file read, bytes (an icon is a few kilobytes).
+SYMBOL_MAX_BYTES = 1 << 20
+#: Most outline points of an SVG symbol (curves counted as sampled).
+SYMBOL_MAX_POINTS = 50_000
 
 __all__ = [
     "AXIS_PROJECTION",
@@ -143,11 +149,13 @@ def symbol_shape(path: str):
     file = FilePath(path)
     if not file.is_file():
         raise FabricationError(f"svg:{path}: the file {'is not a regular file' if file.exists() else 'does not exist'}")
+    check_size(file, SYMBOL_MAX_BYTES, f"svg:{path}: the symbol file", FabricationError)
     try:
         document = SVG.parse(str(file))
     except Exception as exc:  # svgelements reports malformed files with many exception types
         raise FabricationError(f"svg:{path}: cannot be read as SVG: {exc}") from exc
     rings = []
+    total = 0
     t = np.linspace(0, 1, CURVE_STEPS + 1)[1:]
     for element in document.elements():
         if not isinstance(element, Shape):
@@ -162,6 +170,10 @@ def symbol_shape(path: str):
                     points.extend(np.asarray(seg.npoint(t)).tolist())
             if len(points) >= 3:
                 rings.append(np.array(points, dtype=float) * [1, -1])  # SVG y points down
+                total += len(points)
+                if total > SYMBOL_MAX_POINTS:
+                    raise FabricationError(f"svg:{path}: the symbol has more than {SYMBOL_MAX_POINTS:,} outline "
+                                           "points, more than a label shows: simplify it")  # fmt: skip
     shape = nest_rings(rings) if rings else None
     if shape is None or shape.is_empty or shape.area <= 0:
         raise FabricationError(f"svg:{path}: the file holds no filled shape")

@@ -123,6 +123,8 @@ def face_features(
     center = np.asarray(center, dtype=float)
     m = len(poly.faces)
     resting = resting_faces(poly, center)
+    if not resting.any():  # a needle or a sliver: its widest faces are too narrow to hold it
+        raise DesignError("no face of the die is wide enough for it to rest on (is it a needle or a sliver?)")
     if chain is None:
         chain = landing_probabilities(poly, center)
     props = mass_properties(poly)

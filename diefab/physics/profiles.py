@@ -26,7 +26,11 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from diefab.core.errors import PhysicsError
+from diefab.core.files import check_size
 from diefab.physics.simulate import PhysicsSettings
+
+#: Largest physics profile read, bytes (one is a few hundred).
+PROFILE_MAX_BYTES = 1 << 20
 
 __all__ = [
     "PROFILE_KEYS",
@@ -81,7 +85,8 @@ def read_profile(spec) -> tuple[dict[str, Any], str]:
             known = ", ".join(list_profiles()) or "none"
             raise PhysicsError(f"unknown physics profile {text!r} (shipped: {known}; or give a path to a .toml file)")
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
+        check_size(path, PROFILE_MAX_BYTES, "physics profile", PhysicsError)
+        data = tomllib.loads(path.read_text(encoding="utf-8-sig"))
     except (OSError, UnicodeDecodeError) as exc:
         raise PhysicsError(f"cannot read {source}: {exc}") from None
     except tomllib.TOMLDecodeError as exc:

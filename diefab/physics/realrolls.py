@@ -37,6 +37,10 @@ from pathlib import Path
 import numpy as np
 
 from diefab.core.errors import DesignError
+from diefab.core.files import check_size
+
+#: Largest real-rolls file read, bytes (the largest shipped one is 0.4 MB).
+REALROLLS_MAX_BYTES = 16 << 20
 
 __all__ = ["RealRolls", "grouped_tvd", "load_real_rolls"]
 
@@ -318,6 +322,7 @@ def load_real_rolls(path: str | Path) -> RealRolls:
     path = Path(path)
     if not path.is_file():
         raise DesignError(f"real rolls {path} {'is not a regular file' if path.exists() else 'does not exist'}")
+    check_size(path, REALROLLS_MAX_BYTES, "real rolls", DesignError)
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:

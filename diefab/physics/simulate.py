@@ -409,6 +409,57 @@ def _probe_scheduler(address: str, timeout: float) -> None:
         fail(f"{exc.strerror or exc}")
 
 
+#: Seconds a Dask run may go without a worker or without its scheduler before it fails.
+DASK_STALL = 30.0
+
+
+def _gather_dask(client, futures, on_result, check_stop) -> None:
+    """Hand each finished future to `on_result`; fail in one line if the cluster cannot finish.
+
+    A run whose scheduler is gone, or whose cluster has had no worker for
+    :data:`DASK_STALL` seconds, raises :class:`PhysicsError` instead of
+    waiting forever (Dask itself would wait for a worker to come back).
+    """
+    from distributed import wait
+
+    pending = set(futures)
+    lonely = None  # since when the cluster has had no worker
+    while pending:
+        try:
+            ready, _ = wait(list(pending), timeout=SIGNAL_POLL, return_when="FIRST_COMPLETED")
+            ready = set(ready) & pending
+        except TimeoutError:
+            ready = set()
+        except Exception as exc:  # the scheduler went away: distributed raises many kinds
+            raise PhysicsError(f"the Dask scheduler was lost ({type(exc).__name__})") from None
+        for future in ready:
+            pending.discard(future)
+            if future.status != "finished":
+                raise PhysicsError(f"a Dask batch failed or the scheduler was lost ({future.status}); the drops "
+                                   "that had finished are not counted")  # fmt: skip
+            try:
+                on_result(future)
+            except (OSError, TimeoutError) as exc:
+                raise PhysicsError(f"the Dask scheduler was lost ({type(exc).__name__})") from None
+        check_stop()
+        if ready:
+            lonely = None
+            continue
+        if client.status not in ("running", "connecting"):
+            raise PhysicsError(f"the Dask scheduler was lost (client {client.status})")
+        try:
+            workers = len(client.nthreads())
+        except Exception as exc:
+            raise PhysicsError(f"the Dask scheduler was lost ({type(exc).__name__})") from None
+        if workers:
+            lonely = None
+        elif lonely is None:
+            lonely = time.monotonic()
+        elif time.monotonic() - lonely > DASK_STALL:
+            raise PhysicsError(f"the Dask cluster has had no worker for {DASK_STALL:g} s; start workers and run "
+                               "again")  # fmt: skip
+
+
 def _check_run(design: Design, n, seed, workers, settings: PhysicsSettings) -> int:
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= MAX_DROPS:
         raise PhysicsError(f"n={n!r} drops must be an integer in [1, {MAX_DROPS}]")
@@ -467,6 +518,7 @@ def simulate(
     """
     from concurrent.futures.process import BrokenProcessPool
 
+    from diefab.core.stopping import check_stop
     from diefab.physics.world import COCKED, UNSETTLED, run_batch
 
     settings = settings or PhysicsSettings.from_mapping(design.physics)
@@ -493,24 +545,24 @@ def simulate(
     try:
         if scheduler is not None:
             client, own = dask_client(scheduler)  # first: a missing Dask is one line naming the extra
-            from distributed import as_completed
-
             try:
                 futures = client.map(run_batch, [body] * len(batches), [settings] * len(batches), [seed] * len(batches),
                                      [a for a, _ in batches], [b for _, b in batches], pure=False)  # fmt: skip
                 where = {f.key: batch for f, batch in zip(futures, batches)}
                 try:
-                    for future in as_completed(futures):
-                        finished(*where[future.key], future.result())
+                    _gather_dask(client, futures, lambda f: finished(*where[f.key], f.result()), check_stop)
                 except BaseException:
-                    client.cancel(futures)
+                    with contextlib.suppress(Exception):
+                        client.cancel(futures)
                     raise
             finally:
                 if own:
-                    client.close()
+                    with contextlib.suppress(Exception):
+                        client.close(timeout=2)
         elif workers == 1:
             for start, stop in batches:
                 finished(start, stop, run_batch(body, settings, seed, start, stop))
+                check_stop()
         else:
             from concurrent.futures import FIRST_COMPLETED, wait
 
@@ -522,6 +574,7 @@ def simulate(
                 ready, _ = wait(pending, timeout=SIGNAL_POLL, return_when=FIRST_COMPLETED)
                 for future in ready:
                     finished(*pending.pop(future), future.result())
+                check_stop()  # an interrupt that landed where it was swallowed (inside the pool's machinery)
     except KeyboardInterrupt:
         if scheduler is None and workers > 1:
             shutdown_pool(kill=True)

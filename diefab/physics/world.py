@@ -586,7 +586,7 @@ def worker_rss_mb() -> float:
 
 
 def worker_signals() -> None:
-    """Worker initializer: Ctrl-C is left to the parent, and the parent's SIGTERM ends the worker.
+    """Worker initializer: Ctrl-C and hang-ups are left to the parent, and the parent's SIGTERM ends the worker.
 
     The parent cancels a run cleanly on Ctrl-C.  A forked worker would
     otherwise inherit the command line's SIGTERM handler, which turns SIGTERM
@@ -596,3 +596,5 @@ def worker_signals() -> None:
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    if hasattr(signal, "SIGHUP"):  # a closed terminal hangs up the whole group: the parent stops the run
+        signal.signal(signal.SIGHUP, signal.SIG_IGN)

@@ -48,7 +48,7 @@ import numpy as np
 from diefab.core.errors import DiefabError, PhysicsError, StatsError
 from diefab.dice.design import Design
 from diefab.physics.simulate import MAX_DROPS
-from diefab.search.simopt import RUN_FORMAT, RunError, RunLog
+from diefab.search.simopt import RUN_FORMAT, RunError, RunLog, check_budget
 
 __all__ = [
     "DEFAULT_FREE",
@@ -190,11 +190,11 @@ class RealDie:
         return p
 
     def to_json(self) -> dict[str, Any]:
-        from diefab.dice.design import design_to_toml
+        from diefab.search.runid import pinned_toml
 
         return {
             "name": self.name,
-            "design_toml": design_to_toml(self.design),
+            "design_toml": pinned_toml(self.design),
             "counts": self.counts.tolist(),
             "groups": [list(g) for g in self.groups],
             "reference": {k: v.tolist() for k, v in self.reference.items()},
@@ -337,6 +337,8 @@ class CalibrationSpec:
     physics: dict[str, Any] = field(default_factory=dict)
     objective: str = "deviance"
     format: int = RUN_FORMAT
+    budget_minutes: float | None = None
+    max_evaluations: int | None = None
 
     def __post_init__(self) -> None:
         def bad(msg: str) -> None:
@@ -385,6 +387,7 @@ class CalibrationSpec:
                 f"2 points or more and {MAX_GRID} in all at most")  # fmt: skip
         if not (math.isfinite(self.sigma0) and 0 < self.sigma0 <= 0.5):
             bad(f"sigma0={self.sigma0} must be in (0, 0.5]")
+        check_budget(self, bad)
 
     @property
     def real_dice(self) -> list[RealDie]:
@@ -432,15 +435,24 @@ class CalibrationSpec:
             data["bounds"] = tuple((float(lo), float(hi)) for lo, hi in data["bounds"])
             data["x0"] = tuple(float(v) for v in data["x0"])
             return cls(**data)
-        except (ValueError, KeyError, TypeError) as exc:
+        except (ValueError, KeyError, TypeError, AttributeError, IndexError, RecursionError) as exc:
             raise RunError(f"{source} is not a diefab calibration run: {exc}") from None
 
 
 class CalibrationLog(RunLog):
     """A calibration run folder: ``run.json`` (:class:`CalibrationSpec`) and ``evaluations.jsonl``."""
 
+    FEASIBLE = ("deviance",)
+
     def spec(self) -> CalibrationSpec:
-        return CalibrationSpec.from_json(self.spec_text(), str(self.spec_path))
+        text = self.spec_text()
+        spec = CalibrationSpec.from_json(text, str(self.spec_path))
+        try:
+            spec.real_dice  # noqa: B018 -- every die's design must load before anything runs
+        except (DiefabError, ValueError, KeyError, TypeError, AttributeError) as exc:
+            raise RunError(f"{self.spec_path} is not a diefab calibration run: {exc}") from None
+        self.check_identity(text)
+        return spec
 
     def read(self) -> tuple[list[dict[str, Any]], str | None]:
         """The logged records (see :meth:`RunLog.read`); a simulated record must hold counts for every die."""
@@ -449,17 +461,19 @@ class CalibrationLog(RunLog):
         for number, record in enumerate(records, start=1):
             dice = record.get("dice") if record["feasible"] else []
             ok = isinstance(dice, list) and (not record["feasible"] or len(dice) == len(sizes))
-            ok = ok and all(isinstance(d, dict) and _is_counts(d.get("counts"), k) for d, k in zip(dice, sizes))
+            ok = ok and all(isinstance(d, dict) and _is_counts(d.get("counts"), k, record["drops"])
+                            for d, k in zip(dice, sizes))  # fmt: skip
             if not ok:
                 raise RunError(f"{self.path} line {number} is corrupt (not the counts of this run's dice); the run "
                                "cannot be resumed")  # fmt: skip
         return records, warning
 
 
-def _is_counts(value: Any, k: int) -> bool:
-    """True when `value` is a list of `k` whole numbers >= 0 (JSON)."""
+def _is_counts(value: Any, k: int, drops: int) -> bool:
+    """True when `value` is a list of `k` whole numbers >= 0 (JSON) that add up to at most `drops`."""
     return (isinstance(value, list) and len(value) == k
-            and all(isinstance(c, int) and not isinstance(c, bool) and c >= 0 for c in value))  # fmt: skip
+            and all(isinstance(c, int) and not isinstance(c, bool) and c >= 0 for c in value)
+            and sum(value) <= drops)  # fmt: skip
 
 
 def make_spec(

@@ -51,9 +51,10 @@ from typing import Any
 import numpy as np
 
 from diefab.core.errors import DesignError, DiefabError, OutputError
-from diefab.core.files import atomic_write
+from diefab.core.files import hold_lock, write_files
 from diefab.dice.design import Design
 from diefab.geometry.polyhedron import face_margins
+from diefab.physics.simulate import MAX_DROPS
 from diefab.search.optimize import INFEASIBLE, INVALID, OBJECTIVES, Problem, _outside, _polyhedron, candidate_mass
 from diefab.stats.goodness import expected_tvd
 
@@ -94,6 +95,16 @@ def noise_floor(objective: str, k: int, n: int) -> float:
 
 # ----------------------------------------------------------------------
 # run settings
+
+
+def check_budget(spec, bad: Callable[[str], None]) -> None:
+    """Call ``bad(message)`` if `spec`'s ``budget_minutes`` or ``max_evaluations`` (None: none) is not valid."""
+    budget, most = spec.budget_minutes, spec.max_evaluations
+    if budget is not None and (isinstance(budget, bool) or not isinstance(budget, (int, float))
+                               or not (math.isfinite(budget) and budget > 0)):  # fmt: skip
+        bad(f"budget_minutes={budget!r} must be a positive number")
+    if most is not None and (isinstance(most, bool) or not isinstance(most, int) or most <= 0):
+        bad(f"max_evaluations={most!r} must be a positive integer")
 
 
 @dataclass(frozen=True)
@@ -162,6 +173,14 @@ class RunSpec:
         def bad(msg: str) -> None:
             raise DesignError(msg)
 
+        kinds = {"design_toml": str, "start": str, "labels": bool, "physics": dict}
+        for name, kind in kinds.items():
+            if not isinstance(getattr(self, name), kind):
+                bad(f"{name}={getattr(self, name)!r} must be a {kind.__name__}")
+        if not all(isinstance(n, str) for n in self.names) or not all(map(_is_number, self.x0)):
+            bad(f"names {self.names!r} must be strings and x0 {self.x0!r} finite numbers")
+        if not all(isinstance(t, dict) for t in self.robust):
+            bad(f"robust={self.robust!r} must be a list of physics tables")
         if self.objective not in ("eq2", "tvd"):
             bad(f"objective={self.objective!r} must be eq2 or tvd for a simulation run")
         if self.method not in METHODS:
@@ -174,22 +193,15 @@ class RunSpec:
             bad(f"sims_per_eval={self.sims_per_eval} must be > 0")
         if self.max_sims < self.sims_per_eval:
             bad(f"max_sims={self.max_sims} must be >= sims_per_eval={self.sims_per_eval}")
+        if self.max_sims > MAX_DROPS:
+            bad(f"most drops per evaluation {self.max_sims} must be at most {MAX_DROPS:,}")
         if self.seed < 0:
             bad(f"seed={self.seed} must be >= 0")
         if not (math.isfinite(self.min_margin) and self.min_margin >= 0):
             bad(f"min_margin={self.min_margin} must be a non-negative number")
         if not (math.isfinite(self.sigma0) and 0 < self.sigma0 <= 0.5):
             bad(f"sigma0={self.sigma0} must be in (0, 0.5]")
-        if self.budget_minutes is not None and (
-            isinstance(self.budget_minutes, bool) or not isinstance(self.budget_minutes, (int, float))
-            or not (math.isfinite(self.budget_minutes) and self.budget_minutes > 0)
-        ):  # fmt: skip
-            bad(f"budget_minutes={self.budget_minutes!r} must be a positive number")
-        if self.max_evaluations is not None and (
-            isinstance(self.max_evaluations, bool) or not isinstance(self.max_evaluations, int)
-            or self.max_evaluations <= 0
-        ):  # fmt: skip
-            bad(f"max_evaluations={self.max_evaluations!r} must be a positive integer")
+        check_budget(self, bad)
         if len(self.x0) != len(self.names) or not self.names:
             bad(f"x0 has {len(self.x0)} coordinates for parameters {self.names}")
 
@@ -214,7 +226,7 @@ class RunSpec:
             data["names"], data["x0"] = tuple(data["names"]), tuple(float(v) for v in data["x0"])
             data["robust"] = tuple(data.get("robust", ()))
             return cls(**data)
-        except (ValueError, KeyError, TypeError) as exc:
+        except (ValueError, KeyError, TypeError, AttributeError, IndexError, RecursionError) as exc:
             raise RunError(f"{source} is not a diefab run description: {exc}") from None
 
 
@@ -340,7 +352,8 @@ class _Evaluator:
         i = self.count
         if i < len(self.history):
             record = self.history[i]
-            if record.get("kind") != kind or not np.allclose(record["x"], x, rtol=0, atol=1e-9) or (
+            if record.get("kind") != kind or len(record["x"]) != len(x) or not np.allclose(record["x"], x, rtol=0,
+                                                                                             atol=1e-9) or (
                 record["feasible"] and record["drops"] != drops
             ):  # fmt: skip
                 raise RunError(
@@ -675,12 +688,35 @@ class RunLog:
     is appended.
     """
 
+    #: Keys every simulated (feasible) record holds.
+    FEASIBLE: tuple[str, ...] = ("min_margin",)
+
     def __init__(self, folder: str | Path) -> None:
+        from diefab.search.runid import IDENTITY_FILE
+
         self.folder = Path(folder)
         self.spec_path = self.folder / "run.json"
         self.path = self.folder / "evaluations.jsonl"
+        self.identity_path = self.folder / IDENTITY_FILE
         self._fh = None
         self._created = False  # create() made the folder itself
+
+    def lock(self, _creating: bool = False) -> None:
+        """Take the run's lock (until :func:`diefab.core.files.release_locks`): a second process is refused.
+
+        Raises
+        ------
+        diefab.core.files.LockError
+            Another process runs or resumes this run; the message names its id.
+        """
+        from diefab.core.files import ensure_dir
+
+        folder = Path(os.path.abspath(self.folder))
+        if not folder.is_dir():  # a resume of nothing: spec_text() says so; a new run: its parent is made now
+            if not _creating:
+                return
+            ensure_dir(folder.parent)
+        hold_lock(folder.resolve() if folder.exists() else folder, f"run {self.folder}")
 
     def holds_run(self) -> bool:
         """True when the folder holds a run with at least one evaluation (an empty start can be replaced)."""
@@ -690,29 +726,53 @@ class RunLog:
             return False
 
     def create(self, spec: RunSpec) -> None:
+        """Start the run: take its lock (:meth:`lock`), then write ``run.json``, its identity and an empty log."""
+        self.lock(_creating=True)
         if self.holds_run():
             raise RunError(f"{self.folder} already holds a run: resume it with --resume {self.folder} or pick --name")
         self._created = not self.folder.exists()
-        atomic_write(self.spec_path, spec.to_json())
-        atomic_write(self.path, b"")
+        try:
+            self._write_spec(spec, {self.path: b""})
+        except BaseException:
+            if self._created:  # a full disk: no empty run folder left to block the rerun
+                with contextlib.suppress(OSError):
+                    self.folder.rmdir()
+            raise
 
     def update(self, spec: RunSpec) -> None:
-        """Rewrite ``run.json`` (a resumed run's new budget)."""
-        atomic_write(self.spec_path, spec.to_json())
+        """Rewrite ``run.json`` and its identity (a resumed run's new budget, given on the command line)."""
+        self._write_spec(spec)
+
+    def _write_spec(self, spec, others=None) -> None:
+        from diefab.search.runid import identity_text
+
+        text = spec.to_json()
+        write_files({self.spec_path: text, self.identity_path: identity_text(text), **(others or {})})
 
     def discard(self, *others: Path) -> None:
         """Remove a run that never logged an evaluation: its files, `others`, and the folder if this made it."""
         if self.holds_run():
             return
         self.close()
-        for path in (self.spec_path, self.path, *others):
+        for path in (self.spec_path, self.path, self.identity_path, *others):
             Path(path).unlink(missing_ok=True)
         if self._created:
             with contextlib.suppress(OSError):
                 self.folder.rmdir()
 
     def spec(self) -> RunSpec:
-        return RunSpec.from_json(self.spec_text(), str(self.spec_path))
+        text = self.spec_text()
+        spec = RunSpec.from_json(text, str(self.spec_path))
+        self.check_identity(text)
+        from diefab.physics.simulate import PhysicsSettings
+
+        try:  # the design and every physics table must load before anything runs
+            spec.design  # noqa: B018
+            for table in (spec.physics, *spec.robust):
+                PhysicsSettings.from_mapping(table)
+        except (DiefabError, ValueError, KeyError, TypeError, AttributeError) as exc:
+            raise RunError(f"{self.spec_path} is not a diefab run description: {exc}") from None
+        return spec
 
     def spec_text(self) -> str:
         """The text of ``run.json``, once the folder is known to hold a run."""
@@ -721,7 +781,35 @@ class RunLog:
             raise RunError(f"resume folder {self.folder} {state}")
         if not self.spec_path.is_file() or not self.path.is_file():
             raise RunError(f"{self.folder} is not a diefab run folder (no run.json or evaluations.jsonl)")
-        return self.spec_path.read_text(encoding="utf-8")
+        raw = _read_capped(self.spec_path, SPEC_MAX)
+        try:
+            return raw.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise RunError(
+                f"{self.spec_path} is not UTF-8 text (byte {exc.start}); the run cannot be resumed"
+            ) from None
+
+    def check_identity(self, text: str) -> None:
+        """Refuse a run whose ``run.json`` or design files changed since it started, naming the fields.
+
+        Raises
+        ------
+        RunError
+            The identity file is missing or corrupt, or a field differs.
+        """
+        from diefab.search.runid import compare_identity
+
+        if not self.identity_path.is_file():
+            raise RunError(f"{self.folder} has no {self.identity_path.name} (the record of what the run was "
+                           "started with): it cannot be resumed safely; start a new run")  # fmt: skip
+        try:
+            changed = compare_identity(text, _read_capped(self.identity_path, SPEC_MAX).decode("utf-8"))
+        except (DiefabError, UnicodeDecodeError) as exc:
+            raise RunError(f"{self.identity_path}: {exc}; the run cannot be resumed") from None
+        if changed:
+            shown = ", ".join(changed[:4]) + (f" and {len(changed) - 4} more" if len(changed) > 4 else "")
+            raise RunError(f"run {self.folder} changed since it started: {shown} differ(s) from what it was started "
+                           f"with (recorded in {self.identity_path}); it cannot be resumed")  # fmt: skip
 
     def read(self) -> tuple[list[dict[str, Any]], str | None]:
         """The logged records, and a warning if a torn last line was skipped.
@@ -731,7 +819,7 @@ class RunLog:
         RunError
             A corrupt line before the last, naming it.
         """
-        raw = self.path.read_bytes()
+        raw = _read_capped(self.path, LOG_MAX)
         lines = raw.split(b"\n")
         complete, tail = lines[:-1], lines[-1]  # text after the last newline was cut mid-write
         records, warning = [], None
@@ -751,6 +839,12 @@ class RunLog:
         self._good = sum(len(line) + 1 for line in complete[: len(records)])
         if len(records) > len(complete):
             self._good = len(raw)
+        names = set(self.spec().names)
+        for number, record in enumerate(records, start=1):
+            if not names <= set(record["params"]) or (record["feasible"] and not all(
+                    k in record for k in self.FEASIBLE)):  # fmt: skip
+                raise RunError(f"{self.path} line {number} is corrupt (not an evaluation of this run); the run "
+                               "cannot be resumed")  # fmt: skip
         return records, warning
 
     def open(self) -> None:
@@ -793,6 +887,26 @@ class RunLog:
             self._fh = None
 
 
+#: Largest ``run.json`` read, bytes (a calibration of many dice is a few hundred kilobytes).
+SPEC_MAX = 64 << 20
+#: Largest ``evaluations.jsonl`` read, bytes (a month-long run logs a few tens of megabytes).
+LOG_MAX = 1 << 30
+
+
+def _read_capped(path: Path, limit: int) -> bytes:
+    """The bytes of `path`, refusing a file larger than `limit` (RunError)."""
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(limit + 1)
+    except OSError as exc:
+        raise RunError(f"cannot read {path}: {exc.strerror or exc}") from None
+    if len(data) > limit:
+        raise RunError(f"{path} is larger than {limit >> 20} MiB, more than any run writes; it cannot be resumed")
+    return data
+
+
+#: Optional keys of a record that must be numbers when present.
+_NUMBERS = ("elapsed", "seconds", "min_margin", "deviance", "cocked", "unsettled")
 _REQUIRED = {"i": int, "kind": str, "x": list, "params": dict, "drops": int, "objective": float, "feasible": bool}
 
 
@@ -811,4 +925,21 @@ def _parse_record(line: bytes, index: int) -> dict[str, Any] | None:
             ok = isinstance(value, kind) and not (kind is int and isinstance(value, bool))
         if not ok:
             return None
+    if not 0 <= record["drops"] <= MAX_DROPS or not _is_number(record["objective"]):
+        return None
+    if not all(_is_number(v) for v in record["x"]) or not all(_is_number(v) for v in record["params"].values()):
+        return None
+    if not all(_is_number(record[k]) for k in _NUMBERS if k in record):
+        return None
+    counts = record.get("face_counts", [])
+    if not (isinstance(counts, list) and all(isinstance(c, int) and not isinstance(c, bool) and c >= 0 for c in counts)
+            and sum(counts) <= record["drops"]):  # fmt: skip
+        return None
     return record if record["i"] == index else None
+
+
+def _is_number(value: Any) -> bool:
+    """A finite JSON number that a float holds."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    return abs(value) < 1e300 if isinstance(value, int) else math.isfinite(value)

@@ -51,8 +51,10 @@ __all__ = [
 
 #: Most rolls in one set of counts (multinomial sampling works in 64-bit integers).
 MAX_COUNT = 10**15
-#: Largest roll log read (about 50 million rolls).
-MAX_LOG_BYTES = 100 << 20
+#: Largest roll log read, bytes (about two million rolls, far beyond any log rolled by hand).
+MAX_LOG_BYTES = 4 << 20
+#: Most rolls whose power :func:`rolls_for_power` simulates; beyond, the noncentral answer stands.
+MONTE_CARLO_MAX = 10**12
 
 
 def pearson_divergence(q: np.ndarray, p: np.ndarray) -> float:
@@ -206,7 +208,7 @@ def rolls_for_power(
         return None
     df = int(np.count_nonzero(np.asarray(p) > 0)) - 1
     n = int(np.ceil(noncentrality_for_power(df, power, alpha) / delta))
-    if method == "noncentral":
+    if method == "noncentral" or n > MONTE_CARLO_MAX:  # that many rolls: the noncentral law is exact enough
         return n
 
     def enough(m: int) -> bool:

@@ -1,0 +1,113 @@
+"""Stop signals of the command line: Ctrl-C, SIGTERM and SIGHUP end a command cleanly.
+
+A stop signal raises :class:`KeyboardInterrupt` in the main thread, and is
+also *noted*.  The note is what makes a stop impossible to lose: Python
+code that catches ``BaseException`` (an optional import guarded that way, a
+callback whose errors are ignored) can swallow the exception, but not the
+note, and :func:`check_stop` raises again at the next safe point (before a
+file is written, between batches of drops, before the command reports
+success).
+
+Before the package's heavy imports run, :func:`install_early` makes a stop
+end the process at once with one line and exit status 130: nothing has been
+written yet, and an exception raised inside a half-imported module would
+print a traceback or be swallowed by it.
+
+This module imports nothing but the standard library and calls
+:func:`install_early` when imported: the package imports it first.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+import threading
+
+__all__ = ["STOP_SIGNALS", "check_stop", "install", "install_early", "reset", "stop_requested"]
+
+#: The signals that stop a command.
+STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
+#: Exit status of a stopped command (128 + SIGINT, as a shell reports Ctrl-C).
+STOPPED = 130
+
+_noted: list[int] = []
+
+
+def stop_requested() -> int | None:
+    """The first stop signal received since :func:`reset`, or None."""
+    return _noted[0] if _noted else None
+
+
+def reset() -> None:
+    """Forget the stop signals received (a new command starts)."""
+    _noted.clear()
+
+
+def check_stop() -> None:
+    """Raise :class:`KeyboardInterrupt` if a stop signal was received (and perhaps swallowed)."""
+    if _noted:
+        raise KeyboardInterrupt
+
+
+def _interrupt(signum, frame) -> None:
+    _noted.append(signum)
+    raise KeyboardInterrupt
+
+
+def _exit_now(signum, frame) -> None:
+    try:
+        os.write(2, b"diefab: interrupted\n")
+    finally:
+        os._exit(STOPPED)
+
+
+def _ours(handler) -> bool:
+    return handler in (signal.SIG_DFL, signal.default_int_handler, _exit_now, _interrupt)
+
+
+def install() -> dict[int, object]:
+    """Make each stop signal note itself and raise :class:`KeyboardInterrupt`; return the previous handlers.
+
+    A signal whose handler was set by someone else (ignored by ``nohup``,
+    say) is left alone.  Only in the main thread.
+    """
+    return _install(_interrupt)
+
+
+def install_early() -> None:
+    """When this process is the ``diefab`` command, make a stop signal exit at once (status 130, one line)."""
+    if _is_command():
+        _install(_exit_now)
+
+
+def _install(handler) -> dict[int, object]:
+    previous: dict[int, object] = {}
+    if threading.current_thread() is not threading.main_thread():
+        return previous
+    for signum in STOP_SIGNALS:
+        current = signal.getsignal(signum)
+        if _ours(current):
+            previous[signum] = signal.signal(signum, handler)
+    return previous
+
+
+def _is_command() -> bool:
+    """True for ``diefab ...`` (the console script) and ``python -m diefab ...``."""
+    argv = list(getattr(sys, "orig_argv", ()) or ())
+    if sys.argv and os.path.basename(sys.argv[0]) in ("diefab", "diefab.exe"):
+        return True
+    i = 1
+    while i < len(argv):
+        arg = argv[i]
+        if arg == "-m":
+            return i + 1 < len(argv) and argv[i + 1] in ("diefab", "diefab.cli")
+        if arg.startswith("-m"):
+            return arg[2:] in ("diefab", "diefab.cli")
+        if arg == "-c" or not arg.startswith("-"):
+            return False
+        i += 2 if arg in ("-X", "-W") else 1
+    return False
+
+
+install_early()
