@@ -63,9 +63,8 @@ def test_robust_refinement_drops_every_throw_and_keeps_the_worst(monkeypatch):
 
     monkeypatch.setattr(synthesis, "REFINE_DROPS", 600)
     monkeypatch.setattr(synthesis, "MIN_THROW_DROPS", 300)
-    monkeypatch.setattr(synthesis, "REFINE_STEPS", 2)
     throws = [load_profile(p).as_dict() for p in ("soft-tray", "hard-tray")]
-    found = synthesis.synthesize(parse_target("uniform:3"), family="cuboid", model="simulation", budget_seconds=120,
+    found = synthesis.synthesize(parse_target("uniform:3"), family="cuboid", model="simulation", max_drops=1200,
                                  seed=2, workers=1, throws=throws)  # fmt: skip
     assert found.steps, "the refinement ran"
     for step in found.steps:
