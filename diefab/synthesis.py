@@ -373,7 +373,10 @@ def synthesize(
     if final_model not in MODELS:
         raise DesignError(f"model {model!r} is not available (models: {', '.join([*MODELS, 'simulation'])})")
     run = _Run(seed, max_drops, deadline, workers, scheduler, settings, say, tick)
-    pool = candidates(target, faces, family)
+    try:
+        pool = candidates(target, faces, family)
+    except DesignError as exc:
+        raise DesignError(f"{exc}{_nearest_faces(target, faces)}") from None
     fair = _fair_design(next((c for c in pool if c.exact), None), target, name, fill, size_mm, final_model, say)
     if fair is not None:
         return fair
@@ -422,7 +425,8 @@ def synthesize(
                                                                 final_model, run)  # fmt: skip
         if counted is not None:
             return counted
-        raise DesignError(f"no stable, readable die found for target {target.spec!r} (tried {len(tried)} dice)")
+        raise DesignError(f"no stable, readable die found for target {target.spec!r} (tried {len(tried)} dice)"
+                          f"{_nearest_faces(target, faces)}")  # fmt: skip
     if best is not None:  # the polish: under the final model, from the ranked winner
         try:
             again = optimize_design(best.design, model=final_model, min_margin=min_margin, starts=0, seed=seed,
@@ -487,6 +491,21 @@ def _nearest(target: Target, faces: int | None, family: str | None) -> Counted |
     if family is not None:
         found = [c for c in found if (c.plan.family if c.plan else _fair_family(c.faces)) == family]
     return found[0] if found else None
+
+
+def _nearest_faces(target: Target, faces: int | None) -> str:
+    """What the counted dice with the face count nearest `faces` reach, as a clause for a refusal."""
+    if faces is None:
+        return ""
+    found = nearest_dice(target)
+    if not found:
+        return ""
+    near = min(found, key=lambda c: (abs(c.faces - faces), c.tvd))
+    best = found[0]
+    text = f"; the nearest face count, {near.faces}, reaches TVD {float(near.tvd):.4f} ({near.kind} die)"
+    if best is not near:
+        text += f", and {best.faces} faces reach {float(best.tvd):.4f} ({best.kind})"
+    return text
 
 
 def _fair_family(faces: int) -> str | None:
