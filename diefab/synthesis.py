@@ -692,7 +692,9 @@ def _refine(
     step = 0
     while True:
         drops = step_drops(step)
-        if step and run.used + drops * len(runs) > run.max_drops:
+        if not step:  # the first step judges the model's die: within the budget, however small
+            drops = min(drops, (run.max_drops - run.used) // len(runs))
+        if drops < 1 or (step and run.used + drops * len(runs) > run.max_drops):
             break
         if step and time.monotonic() > run.deadline:
             run.capped = True

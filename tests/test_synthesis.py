@@ -57,7 +57,8 @@ def test_synthesis_under_the_solid_angle_model_hits_the_target(spec, family):
 def test_design_command_writes_a_design_that_loads(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_:
         main(["design", "uniform:3", "--family", "cuboid", "--model", "solid-angle", "--budget", "0.2",
-              "--validate-sims", "300", "--workers", "1", "--out", str(tmp_path), "--json"])  # fmt: skip
+              "--tolerance", "0.5", "--validate-sims", "300", "--workers", "1", "--out", str(tmp_path),
+              "--json"])  # fmt: skip
     assert exit_.value.code == 0
     report = json.loads(capsys.readouterr().out)
     assert {"design_file", "family", "params", "faces", "values", "predicted", "objective", "tvd", "validated",
@@ -110,3 +111,27 @@ def test_optimize_works_for_every_family_with_parameters(family, params, target)
     after = np.abs(result.values - start.target_distribution.aligned(start.support)).sum()
     assert after <= before + 1e-12 or before > 1  # never worse than a feasible start
     assert result.min_margin >= 0.05 and set(result.design.params) >= {n for n in params if n != "n"} - {"k"}
+
+
+def test_a_die_above_the_tolerance_is_written_and_exits_3(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["design", "uniform:3", "--family", "cuboid", "--model", "solid-angle", "--tolerance", "0.001",
+              "--validate-sims", "300", "--workers", "1", "--out", str(tmp_path), "--json"])  # fmt: skip
+    assert exit_.value.code == 3
+    captured = capsys.readouterr()
+    report = json.loads(captured.out)
+    assert report["within_tolerance"] is False and report["validated"]["tvd"] > 0.001
+    assert report["reproducible"] is True and load_design(report["design_file"]).family == "cuboid"
+    assert "above the tolerance 0.001" in captured.err and "exit status 3" in captured.err
+    # a perfect die shows this much TVD at 300 drops: the verdict says so
+    assert "--validate-sims" in captured.err
+
+
+@pytest.mark.slow
+def test_design_is_a_function_of_seed_and_options_not_of_workers():
+    target = parse_target("uniform:3")
+    runs = [synthesize(target, family="cuboid", model="simulation", max_drops=2000, seed=3, workers=w)
+            for w in (1, 2)]  # fmt: skip
+    assert runs[0].design.params == runs[1].design.params and not runs[0].capped
+    assert [s["simulated_tvd"] for s in runs[0].steps] == [s["simulated_tvd"] for s in runs[1].steps]
+    assert runs[0].drops == runs[1].drops <= 2000
