@@ -47,8 +47,8 @@ def _diefab(args: list[str]) -> subprocess.CompletedProcess:
 
 
 def measure(target: str, drops: int) -> dict:
-    from diefab.counting import nearest_dice
-    from diefab.targets import parse_target
+    from diefab.dice.targets import parse_target
+    from diefab.search.counting import nearest_dice
 
     best = nearest_dice(parse_target(target))
     nearest = {"kind": best[0].kind, "faces": best[0].faces, "tvd": float(best[0].tvd)} if best else None

@@ -6,9 +6,9 @@ from itertools import combinations_with_replacement
 import numpy as np
 import pytest
 
-from diefab.counting import exact_probabilities, nearest_counts, nearest_dice, nearest_two_class
-from diefab.targets import parse_target
-from diefab.verdict import judge, smallest_probability
+from diefab.dice.targets import parse_target
+from diefab.search.counting import exact_probabilities, nearest_counts, nearest_dice, nearest_two_class
+from diefab.search.verdict import judge, smallest_probability
 
 
 def _brute_force(goal: list[Fraction], faces: int) -> Fraction:

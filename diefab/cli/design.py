@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from .common import (
+from diefab.cli.common import (
     FILL_OPTIONS,
     check_fill_options,
     console,
@@ -89,16 +89,16 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
     """
     from dataclasses import replace
 
-    from ..design import design_to_toml
-    from ..files import atomic_write, ensure_dir, output_path
-    from ..mass import Fill
-    from ..physics import PhysicsSettings
-    from ..profiles import STANDARD, load_profile
-    from ..stats import pearson_divergence, tvd
-    from ..synthesis import synthesize
-    from ..targets import parse_target
-    from ..verdict import closing_check, fast_agreement, judge
-    from .common import refuse_options
+    from diefab.cli.common import refuse_options
+    from diefab.core.files import atomic_write, ensure_dir, output_path
+    from diefab.dice.design import design_to_toml
+    from diefab.dice.targets import parse_target
+    from diefab.made.mass import Fill
+    from diefab.physics.profiles import STANDARD, load_profile
+    from diefab.physics.simulate import PhysicsSettings
+    from diefab.search.synthesis import synthesize
+    from diefab.search.verdict import closing_check, fast_agreement, judge
+    from diefab.stats.goodness import pearson_divergence, tvd
 
     t0 = time.monotonic()
     goal = parse_target(target)
