@@ -33,7 +33,7 @@ def test_several_corrections_score_the_worst_of_them():
 
 def test_design_keeps_the_physics_profile_and_checks_under_it(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_:
-        main(["design", "uniform:3", "--family", "cuboid", "--model", "solid-angle", "--budget", "0.2",
+        main(["design", "uniform:3", "--family", "cuboid", "--model", "solid-angle",
               "--tolerance", "0.5", "--validate-sims", "200", "--workers", "1", "--physics", "wooden-table",
               "--out", str(tmp_path), "--json"])  # fmt: skip
     assert exit_.value.code == 0

@@ -56,7 +56,7 @@ def test_synthesis_under_the_solid_angle_model_hits_the_target(spec, family):
 
 def test_design_command_writes_a_design_that_loads(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_:
-        main(["design", "uniform:3", "--family", "cuboid", "--model", "solid-angle", "--budget", "0.2",
+        main(["design", "uniform:3", "--family", "cuboid", "--model", "solid-angle",
               "--tolerance", "0.5", "--validate-sims", "300", "--workers", "1", "--out", str(tmp_path),
               "--json"])  # fmt: skip
     assert exit_.value.code == 0

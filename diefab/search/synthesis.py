@@ -425,8 +425,9 @@ def synthesize(
                                                                 final_model, run)  # fmt: skip
         if counted is not None:
             return counted
+        cut = "; the wall-time cap ended the search early" if run.capped else ""
         raise DesignError(f"no stable, readable die found for target {target.spec!r} (tried {len(tried)} dice)"
-                          f"{_nearest_faces(target, faces)}")  # fmt: skip
+                          f"{cut}{_nearest_faces(target, faces)}")  # fmt: skip
     if best is not None:  # the polish: under the final model, from the ranked winner
         try:
             again = optimize_design(best.design, model=final_model, min_margin=min_margin, starts=0, seed=seed,
