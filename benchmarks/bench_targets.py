@@ -46,12 +46,17 @@ def _diefab(args: list[str]) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, "-m", "diefab", *args], cwd=ROOT, capture_output=True, text=True)
 
 
-def measure(target: str, drops: int) -> dict:
+def counted(target: str) -> dict | None:
+    """The fair or two-class die of at most 60 steady faces nearest `target`, by exact arithmetic."""
     from diefab.dice.targets import parse_target
     from diefab.search.counting import nearest_dice
 
     best = nearest_dice(parse_target(target))
-    nearest = {"kind": best[0].kind, "faces": best[0].faces, "tvd": float(best[0].tvd)} if best else None
+    return {"kind": best[0].kind, "faces": best[0].faces, "tvd": float(best[0].tvd)} if best else None
+
+
+def measure(target: str, drops: int) -> dict:
+    nearest = counted(target)
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.monotonic()
         done = _diefab(["design", target, "--seed", str(SEED), "--validate-sims", "0", "--out", tmp, "--json"])
@@ -76,6 +81,13 @@ def measure(target: str, drops: int) -> dict:
     }
 
 
+def _save(results: dict) -> None:
+    RESULTS.parent.mkdir(parents=True, exist_ok=True)
+    part = RESULTS.with_suffix(".json.part")
+    part.write_text(json.dumps(results, indent=2) + "\n")
+    part.replace(RESULTS)
+
+
 def table(results: dict) -> str:
     rows = ["| target | die | faces | design s | validated TVD (drops) | nearest counted die (exact TVD) |",
             "|---|---|---|---|---|---|"]  # fmt: skip
@@ -85,6 +97,9 @@ def table(results: dict) -> str:
             continue
         n = r.get("nearest_counted")
         near = f"{n['faces']}-face {n['kind']}, {n['tvd']:.4f}" if n else "none"
+        if "family" not in r and "error" not in r:
+            rows.append(f"| {target} | not run | | | | {near} |")
+            continue
         if "error" in r:
             rows.append(f"| {target} | refused: {r['error']} | | {r['design_seconds']:.0f} | | {near} |")
             continue
@@ -100,21 +115,26 @@ def main() -> None:
     parser.add_argument("--drops", type=int, default=30_000, help="Drops of the validation (default 30000)")
     parser.add_argument("--force", action="store_true", help="Measure again targets already measured")
     parser.add_argument("--table", action="store_true", help="Print the Markdown table of the results and stop")
+    parser.add_argument("--counted-only", action="store_true",
+                        help="Only the nearest counted die of each target (exact arithmetic, no drops)")  # fmt: skip
     args = parser.parse_args()
     results = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {}
     if args.table:
         print(table(results))
         return
+    if args.counted_only:
+        for target in args.targets or TARGETS:
+            results.setdefault(target, {"target": target})["nearest_counted"] = counted(target)
+            print(table({target: results[target]}).splitlines()[-1], flush=True)
+        _save(results)
+        return
     print(f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f}; validation at {args.drops} drops",
           flush=True)  # fmt: skip
     for target in args.targets or TARGETS:
-        if target in results and not args.force:
+        if ("family" in results.get(target, {}) or "error" in results.get(target, {})) and not args.force:
             continue
         results[target] = measure(target, args.drops)
-        RESULTS.parent.mkdir(parents=True, exist_ok=True)
-        part = RESULTS.with_suffix(".json.part")
-        part.write_text(json.dumps(results, indent=2) + "\n")
-        part.replace(RESULTS)
+        _save(results)
         print(table({target: results[target]}).splitlines()[-1], flush=True)
     print(table(results))
 

@@ -135,3 +135,19 @@ def test_design_is_a_function_of_seed_and_options_not_of_workers():
     assert runs[0].design.params == runs[1].design.params and not runs[0].capped
     assert [s["simulated_tvd"] for s in runs[0].steps] == [s["simulated_tvd"] for s in runs[1].steps]
     assert runs[0].drops == runs[1].drops <= 2000
+
+
+@pytest.mark.slow
+def test_faces_counts_the_resting_faces_a_player_asks_for():
+    found = synthesize(parse_target("2d6"), faces=11, model="fast", seed=0)
+    d = found.design
+    assert len(d.values) == 11 and sorted(set(d.values.values())) == list(range(2, 13))
+    assert found.method == "shaped" and found.nearest is None  # no steady fair or two-class die has 11 faces
+
+
+def test_a_face_count_too_small_says_what_the_nearest_reaches(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["design", "3dF", "--faces", "5", "--out", str(tmp_path)])
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert "fewer than" in err and "the nearest face count" in err and len(err.strip().splitlines()) == 1
