@@ -266,13 +266,20 @@ def _split_counts(weights: np.ndarray, x: int, y: int, n: int) -> tuple[tuple[in
     return (alpha, beta) if sum(beta) == n else None
 
 
-def two_class_plans(target: Target, max_faces: int = MAX_FACES) -> list[TwoClass]:
-    """Two-class dice that roll `target` exactly at the right share, fewest faces first, then share nearest 1/2."""
+def two_class_plans(target: Target, max_faces: int = MAX_FACES, enough: int | None = None) -> list[TwoClass]:
+    """Two-class dice that roll `target` exactly at the right share, fewest faces first, then share nearest 1/2.
+
+    With `enough`, the search stops after the first face count at which
+    that many plans have been found (the list then starts as it would
+    without it).
+    """
     d = denominator(target)
     if d is None:
         return []
     plans = []
     for faces in range(6, max_faces + 1, 2):
+        if enough is not None and len(plans) >= enough:
+            break
         n = faces // 2
         for scale in range(1, 4):
             total, rest = divmod(scale * d, n)  # x + y

@@ -213,7 +213,7 @@ def _fair(target: Target, faces: int | None) -> list[Candidate]:
 
 def _two_class(target: Target, faces: int | None) -> list[Candidate]:
     """Two-class dice that roll `target` once their top half's share is tuned (with `faces` faces, if given)."""
-    plans = two_class_plans(target, max(MAX_FACES, faces or 0))
+    plans = two_class_plans(target, max(MAX_FACES, faces or 0), enough=2 if faces is None else None)
     return [Candidate(p.family, p.params, p.faces, plan=p) for p in plans if faces in (None, p.faces)][:2]
 
 
