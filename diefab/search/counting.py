@@ -44,8 +44,11 @@ __all__ = ["Counted", "exact_probabilities", "nearest_counts", "nearest_dice", "
 
 #: Largest denominator used to read a target's probabilities as fractions.
 MAX_DENOMINATOR = 1_000_000
-#: Shares of the top half searched for a two-class die's counts (refined exactly afterwards).
-SHARE_GRID = np.linspace(SHARE_RANGE[0], SHARE_RANGE[1], 41)
+#: Shares of the top half searched for a two-class die's counts (refined exactly afterwards): a grid, and the
+#: fractions x / t with t up to 16, where targets with small denominators are carried exactly.
+SHARE_GRID = np.array(sorted({*np.round(np.linspace(SHARE_RANGE[0], SHARE_RANGE[1], 41), 12).tolist(),
+                              *(x / t for t in range(2, 17) for x in range(1, t)
+                                if SHARE_RANGE[0] <= x / t <= SHARE_RANGE[1])}))  # fmt: skip
 
 
 def exact_probabilities(target: Target) -> list[Fraction]:
