@@ -90,6 +90,8 @@ RANK_EVALUATIONS = 2400
 POLISH_EVALUATIONS = 3000
 #: Model evaluations of each refinement step's re-optimization under the corrected fast model.
 STEP_EVALUATIONS = 1000
+#: Drops the refinement of a shaped die leaves for tuning the nearest two-class die it is weighed against.
+COUNTED_RESERVE = 10_000
 #: Default tolerance: a validated TVD above it is a die that does not roll like its target.
 TOLERANCE = 0.02
 #: Fewest drops under each of several throws in a refinement step.
@@ -439,7 +441,11 @@ def synthesize(
         run.note_cap()
     out = Synthesis(best.design, best.objective, best.values, final_model, tried)
     if model == "simulation":
+        # drops kept back to tune the nearest counted die, if it has to be weighed against this one
+        reserve = min(COUNTED_RESERVE, max_drops // 4) if nearest is not None and nearest.plan is not None else 0
+        run.max_drops -= reserve
         _refine(out, target, min_margin, run, min(REFINE_GOAL, tolerance), throws)
+        run.max_drops += reserve
     out.nearest, out.capped, out.drops = nearest, run.capped, run.used
     shaped = out.simulated_tvd if out.simulated_tvd is not None else float(tvd(out.predicted,
                                                                                target.aligned(out.design.support)))
