@@ -67,3 +67,18 @@ def test_the_verdict_names_the_limit_and_passes_a_die_within_tolerance():
     assert judge(target, {**check, "tvd": 0.015}, 0.02, method="shaped").met
     noisy = judge(parse_target("2d6"), {"tvd": 0.05, "n": 300, "expected_tvd": 0.04}, 0.02, method="two-class")
     assert not noisy.met and "--validate-sims" in noisy.why
+
+
+def test_the_fast_model_is_not_trusted_where_it_differs_from_the_drops():
+    from diefab.dice.design import load_design
+    from diefab.search.verdict import FAST_TRUST, fast_agreement
+
+    d = load_design("d6")  # a cube: the fast model gives 1/6 a face
+    goal = d.target_distribution.aligned(d.support)
+    near = fast_agreement(d, goal)
+    assert near["trusted"] and near["tvd_between"] < 1e-3
+    skewed = goal.copy()
+    skewed[0] += 2 * FAST_TRUST
+    skewed[-1] -= 2 * FAST_TRUST
+    far = fast_agreement(d, skewed)
+    assert not far["trusted"] and far["tvd_between"] == pytest.approx(2 * FAST_TRUST, abs=1e-3)
