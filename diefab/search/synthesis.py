@@ -17,11 +17,17 @@
    is optimized under `model` and -- with ``model="simulation"`` -- refined
    against pybullet: it drops the die, adds the simulated-minus-modelled face
    frequencies to the model as a correction, re-optimizes, and repeats while
-   time is left, keeping the design whose simulated distance to the target
-   is smallest.
+   drops are left and the simulated distance to the target is above the
+   goal, keeping the design whose simulated distance is smallest;
+4. when no fair or two-class die is exact, the one whose face counts come
+   nearest (:mod:`diefab.search.counting`) is weighed against the shaped
+   die, and the nearer is kept.
 
-``faces`` and ``family`` narrow the candidates (``faces=11`` for 2d6 asks for
-a shaped die).  The caller validates the result on a fresh seed.
+Every stage's budget is in model evaluations or drops, so the result is a
+function of the target, the options and the seed.  ``faces`` (resting
+faces) and ``family`` narrow the candidates (``faces=11`` for 2d6 asks for a
+shaped die).  The caller validates the result on a fresh seed
+(:func:`diefab.search.verdict.closing_check`).
 
 Examples
 --------
@@ -430,15 +436,15 @@ def synthesize(
         cut = "; the wall-time cap ended the search early" if run.capped else ""
         raise DesignError(f"no stable, readable die found for target {target.spec!r} (tried {len(tried)} dice)"
                           f"{cut}{_nearest_faces(target, faces)}")  # fmt: skip
-    if best is not None:  # the polish: under the final model, from the ranked winner
-        try:
-            again = optimize_design(best.design, model=final_model, min_margin=min_margin, starts=0, seed=seed,
-                                    name=name, deadline=deadline, budget=POLISH_EVALUATIONS)  # fmt: skip
-            say(f"{again.design.family}: Eq. (2) {again.objective:.5f} under the {final_model} model")
-            best = again
-        except DesignError as exc:
-            say(f"the {final_model} model finds no stable die from the solid-angle optimum: {exc}")
-        run.note_cap()
+    # the polish: under the final model, from the ranked winner
+    try:
+        again = optimize_design(best.design, model=final_model, min_margin=min_margin, starts=0, seed=seed,
+                                name=name, deadline=deadline, budget=POLISH_EVALUATIONS)  # fmt: skip
+        say(f"{again.design.family}: Eq. (2) {again.objective:.5f} under the {final_model} model")
+        best = again
+    except DesignError as exc:
+        say(f"the {final_model} model finds no stable die from the solid-angle optimum: {exc}")
+    run.note_cap()
     out = Synthesis(best.design, best.objective, best.values, final_model, tried)
     if model == "simulation":
         # drops kept back to tune the nearest counted die, if it has to be weighed against this one
