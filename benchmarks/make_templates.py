@@ -27,6 +27,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results" / "templates.json"
+#: Extra design options of a template (a larger die where labels would print too thin at 30 mm).
+OPTIONS = {"2d6": ["--size", "40"]}
 #: Template name -> target.
 TEMPLATES = {
     "2d6": "2d6",
@@ -51,7 +53,7 @@ def make(name: str, target: str) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.monotonic()
         done = _run(["design", target, "--seed", str(SEED), "--validate-sims", str(DROPS), "--name", name,
-                     "--out", tmp, "--json"], ROOT)  # fmt: skip
+                     *OPTIONS.get(name, []), "--out", tmp, "--json"], ROOT)  # fmt: skip
         seconds = time.monotonic() - t0
         if done.returncode not in (0, 3):
             return {"target": target, "error": done.stderr.strip().splitlines()[-1:]}
@@ -68,7 +70,8 @@ def make(name: str, target: str) -> dict:
     v = report["validated"]
     return {
         "target": target,
-        "command": f"python -m diefab design {target} --seed {SEED} --validate-sims {DROPS} --name {name}",
+        "command": " ".join(["python -m diefab design", target, "--seed", str(SEED), "--validate-sims", str(DROPS),
+                             "--name", name, *OPTIONS.get(name, [])]),
         "exit": done.returncode,
         "family": report["family"],
         "faces": len(report["values"]),
