@@ -93,7 +93,7 @@ def test_unstable_design_is_reported():
 
 
 def test_unknown_template_and_family():
-    with pytest.raises(DesignError, match="unknown template"):
+    with pytest.raises(DesignError, match="unknown template.*diefab design TARGET"):
         load_design("no-such-die")
     with pytest.raises(DesignError, match="unknown family"):
         parse_design('name = "x"\nfamily = "blob"\n')
@@ -147,3 +147,16 @@ f6 = 6
     d = load_design(tmp_path / "cube.toml")
     np.testing.assert_allclose(value_probabilities(d), 1 / 6)
     assert d.mm_per_unit == pytest.approx(d.size_mm / 2)
+
+
+@pytest.mark.parametrize(
+    ("spec", "template"), [("3dF", "3df"), ("binomial:4", "binomial-4"), ("UNIFORM:3", "uniform-3"), ("2d6", "2d6")]
+)
+def test_a_target_name_finds_its_ready_made_die(spec, template):
+    from diefab.dice.design import list_templates, template_path
+
+    if template not in {d.name for d in list_templates()}:
+        pytest.skip(f"no template {template} in this checkout")
+    assert template_path(spec).name == f"{template}.toml"
+    d = load_design(spec)
+    assert d.name == template and d.target_distribution.values.tolist() == sorted(set(d.values.values()))

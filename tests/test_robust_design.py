@@ -33,9 +33,9 @@ def test_several_corrections_score_the_worst_of_them():
 
 def test_design_keeps_the_physics_profile_and_checks_under_it(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_:
-        main(["design", "uniform:3", "--family", "cuboid", "--model", "solid-angle", "--budget", "0.2",
-              "--validate-sims", "200", "--workers", "1", "--physics", "wooden-table", "--out", str(tmp_path),
-              "--json"])  # fmt: skip
+        main(["design", "uniform:3", "--family", "cuboid", "--model", "solid-angle",
+              "--tolerance", "0.5", "--validate-sims", "200", "--workers", "1", "--physics", "wooden-table",
+              "--out", str(tmp_path), "--json"])  # fmt: skip
     assert exit_.value.code == 0
     report = json.loads(capsys.readouterr().out)
     d = load_design(report["design_file"])
@@ -63,9 +63,8 @@ def test_robust_refinement_drops_every_throw_and_keeps_the_worst(monkeypatch):
 
     monkeypatch.setattr(synthesis, "REFINE_DROPS", 600)
     monkeypatch.setattr(synthesis, "MIN_THROW_DROPS", 300)
-    monkeypatch.setattr(synthesis, "REFINE_STEPS", 2)
     throws = [load_profile(p).as_dict() for p in ("soft-tray", "hard-tray")]
-    found = synthesis.synthesize(parse_target("uniform:3"), family="cuboid", model="simulation", budget_seconds=120,
+    found = synthesis.synthesize(parse_target("uniform:3"), family="cuboid", model="simulation", max_drops=1200,
                                  seed=2, workers=1, throws=throws)  # fmt: skip
     assert found.steps, "the refinement ran"
     for step in found.steps:

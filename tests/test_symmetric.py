@@ -127,9 +127,9 @@ def test_tune_share_finds_a_noisy_root():
         return rng.binomial(landed, p) / landed, landed
 
     goal = 0.5
-    found = tune_share(share_of, 0.3, (0.0, 3.0), goal, slope=0.3, deadline=float("inf"), seed=4)
+    found = tune_share(share_of, 0.3, (0.0, 3.0), goal, slope=0.3, seed=4)
     assert abs(found.value - rng_root) < 0.08
-    again = tune_share(share_of, 0.3, (0.0, 3.0), goal, slope=0.3, deadline=float("inf"), seed=4)
+    again = tune_share(share_of, 0.3, (0.0, 3.0), goal, slope=0.3, seed=4)
     assert again.value == found.value  # deterministic
 
 

@@ -45,7 +45,7 @@ def test_a_face_count_that_fits_nothing_says_why_and_what_fits():
 @pytest.mark.parametrize(("spec", "family"), [("1:3,2:3,3:3,4:3,5:3,6:5", "cuboid"), ("uniform:3", "prism")])
 def test_synthesis_under_the_solid_angle_model_hits_the_target(spec, family):
     target = parse_target(spec)
-    found = synthesize(target, family=family, model="solid-angle", budget_seconds=20, seed=1)
+    found = synthesize(target, family=family, model="solid-angle", seed=1)
     d = found.design
     d.check_stable(0.0)
     assert unreadable(d.polyhedron, d.values) is None
@@ -56,8 +56,9 @@ def test_synthesis_under_the_solid_angle_model_hits_the_target(spec, family):
 
 def test_design_command_writes_a_design_that_loads(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_:
-        main(["design", "uniform:3", "--family", "cuboid", "--model", "solid-angle", "--budget", "0.2",
-              "--validate-sims", "300", "--workers", "1", "--out", str(tmp_path), "--json"])  # fmt: skip
+        main(["design", "uniform:3", "--family", "cuboid", "--model", "solid-angle",
+              "--tolerance", "0.5", "--validate-sims", "300", "--workers", "1", "--out", str(tmp_path),
+              "--json"])  # fmt: skip
     assert exit_.value.code == 0
     report = json.loads(capsys.readouterr().out)
     assert {"design_file", "family", "params", "faces", "values", "predicted", "objective", "tvd", "validated",
@@ -110,3 +111,43 @@ def test_optimize_works_for_every_family_with_parameters(family, params, target)
     after = np.abs(result.values - start.target_distribution.aligned(start.support)).sum()
     assert after <= before + 1e-12 or before > 1  # never worse than a feasible start
     assert result.min_margin >= 0.05 and set(result.design.params) >= {n for n in params if n != "n"} - {"k"}
+
+
+def test_a_die_above_the_tolerance_is_written_and_exits_3(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["design", "uniform:3", "--family", "cuboid", "--model", "solid-angle", "--tolerance", "0.001",
+              "--validate-sims", "300", "--workers", "1", "--out", str(tmp_path), "--json"])  # fmt: skip
+    assert exit_.value.code == 3
+    captured = capsys.readouterr()
+    report = json.loads(captured.out)
+    assert report["within_tolerance"] is False and report["validated"]["tvd"] > 0.001
+    assert report["reproducible"] is True and load_design(report["design_file"]).family == "cuboid"
+    assert "above the tolerance 0.001" in captured.err and "exit status 3" in captured.err
+    # a perfect die shows this much TVD at 300 drops: the verdict says so
+    assert "--validate-sims" in captured.err
+
+
+@pytest.mark.slow
+def test_design_is_a_function_of_seed_and_options_not_of_workers():
+    target = parse_target("uniform:3")
+    runs = [synthesize(target, family="cuboid", model="simulation", max_drops=2000, seed=3, workers=w)
+            for w in (1, 2)]  # fmt: skip
+    assert runs[0].design.params == runs[1].design.params and not runs[0].capped
+    assert [s["simulated_tvd"] for s in runs[0].steps] == [s["simulated_tvd"] for s in runs[1].steps]
+    assert runs[0].drops == runs[1].drops <= 2000
+
+
+@pytest.mark.slow
+def test_faces_counts_the_resting_faces_a_player_asks_for():
+    found = synthesize(parse_target("2d6"), faces=11, model="fast", seed=0)
+    d = found.design
+    assert len(d.values) == 11 and sorted(set(d.values.values())) == list(range(2, 13))
+    assert found.method == "shaped" and found.nearest is None  # no steady fair or two-class die has 11 faces
+
+
+def test_a_face_count_too_small_says_what_the_nearest_reaches(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["design", "3dF", "--faces", "5", "--out", str(tmp_path)])
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert "fewer than" in err and "the nearest face count" in err and len(err.strip().splitlines()) == 1

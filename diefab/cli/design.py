@@ -26,9 +26,13 @@ from diefab.cli.common import (
 
 _METHOD = {
     "fair": "a fair die, its faces counted out to the target",
+    "fair-nearest": "a fair die, its faces counted out as near the target as its face count allows",
     "two-class": "two classes of faces counted out to the target, one share tuned",
+    "two-class-nearest": "two classes of faces counted out as near the target as they allow, one share tuned",
     "shaped": "shape optimized",
 }
+#: Exit status of a die written whose closing check is further from its target than --tolerance.
+EXIT_ABOVE_TOLERANCE = 3
 
 
 def _slug(text: str) -> str:
@@ -44,8 +48,18 @@ def _slug(text: str) -> str:
 @click.option("--model", type=click.Choice(["fast", "solid-angle", "basins", "simulation"]), default="simulation",
               show_default=True,
               help="Model optimized; simulation refines the fast model's die against pybullet drops.")  # fmt: skip
-@click.option("--budget", type=float, default=6.0, show_default=True,
-              help="Wall-time budget of the search, minutes (the closing check comes on top).")  # fmt: skip
+@click.option("--max-drops", type=click.IntRange(1, 100_000_000), default=64_000, show_default=True,
+              help="Drops the search may spend (tuning or refinement; the closing check comes on top). The same "
+              "seed and options give the same die.")  # fmt: skip
+@click.option(
+    "--budget",
+    type=float,
+    default=None,
+    help="Wall-time cap of the search, minutes (default none). A run it ends is not reproducible.",
+)
+@click.option("--tolerance", type=float, default=0.02, show_default=True,
+              help="Largest validated TVD of a die that rolls like its target; above it the die is written and "
+              "the exit status is 3.")  # fmt: skip
 @click.option("--name", default=None, help="Design name (default FAMILY-TARGET).")
 @seed_option("Seed of starts and drops.")
 @click.option("--size", "size_mm", type=float, default=30.0, show_default=True,
@@ -55,6 +69,7 @@ def _slug(text: str) -> str:
 @click.option("--validate-sims", type=click.IntRange(0, 10_000_000), default=10_000, show_default=True,
               help="Drops of the closing check (on a seed the search never used); 0 skips it.")  # fmt: skip
 @click.option("--workers", type=click.IntRange(1, 256), default=None, help="Worker processes (default all cores).")
+@click.option("--scheduler", default=None, metavar="ADDRESS", help="Run the drops on this Dask scheduler.")
 @physics_file_option
 @click.option("--robust", is_flag=True,
               help="Refine and check against every standard throw and table (the shipped profiles soft-tray, "
@@ -68,8 +83,10 @@ def _slug(text: str) -> str:
     help="Also write one self-contained HTML page to FILE: the die, its net, its distribution, its check.",
 )
 @json_option
-def design(target, faces, family_name, model, budget, name, seed, size_mm, min_margin, validate_sims, workers,
-           physics_profile, robust, out_dir, report_file, as_json, fill_kind, **fill_settings) -> None:  # fmt: skip
+@click.pass_context
+def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance, name, seed, size_mm, min_margin,
+           validate_sims, workers, scheduler, physics_profile, robust, out_dir, report_file, as_json, fill_kind,
+           **fill_settings) -> None:  # fmt: skip
     """Design a die that rolls like TARGET (2d6, 3dF, binomial:4, uniform:3, 1:3,2:3,...).
 
     Picks a family and face count that can carry the target's values,
@@ -79,17 +96,23 @@ def design(target, faces, family_name, model, budget, name, seed, size_mm, min_m
     the die is refined and checked under that profile, which the design file
     keeps as its [physics] table; with --robust, under each standard throw
     and table at once.
+
+    Exit status: 0 when the closing check's TVD is within --tolerance, 3 when
+    it is not (the die is still written, and stderr says what limits it), 2
+    on bad input, 130 when interrupted.
     """
     from dataclasses import replace
 
+    from diefab.cli.common import refuse_options
     from diefab.core.files import atomic_write, ensure_dir, output_path
     from diefab.dice.design import design_to_toml
     from diefab.dice.targets import parse_target
     from diefab.made.fill import Fill
     from diefab.physics.profiles import STANDARD, load_profile
-    from diefab.physics.simulate import PhysicsSettings, simulate
+    from diefab.physics.simulate import PhysicsSettings
     from diefab.search.synthesis import synthesize
-    from diefab.stats.goodness import goodness_of_fit, pearson_divergence, tvd
+    from diefab.search.verdict import closing_check, fast_agreement, judge
+    from diefab.stats.goodness import pearson_divergence, tvd
 
     t0 = time.monotonic()
     if report_file is not None and report_file.suffix.lower() not in (".html", ".htm"):
@@ -98,8 +121,10 @@ def design(target, faces, family_name, model, budget, name, seed, size_mm, min_m
     check_fill_options(fill_kind or "solid", fill_settings)
     changes = {FILL_OPTIONS[k][0]: v for k, v in fill_settings.items() if v is not None}
     made = Fill(kind=fill_kind or "solid", **changes)  # a setting out of range: DesignError, one line
-    if not (np.isfinite(budget) and budget > 0):
+    if budget is not None and not (np.isfinite(budget) and budget > 0):
         raise click.BadParameter(f"{budget} must be a positive number of minutes", param_hint="--budget")
+    if not (np.isfinite(tolerance) and 0 < tolerance < 1):
+        raise click.BadParameter(f"{tolerance} must be a number in (0, 1)", param_hint="--tolerance")
     if not (np.isfinite(size_mm) and size_mm > 0):
         raise click.BadParameter(f"{size_mm} must be a positive number of millimetres", param_hint="--size")
     check_size(size_mm)
@@ -110,17 +135,22 @@ def design(target, faces, family_name, model, budget, name, seed, size_mm, min_m
     if robust and model != "simulation":
         raise click.BadParameter("--robust needs --model simulation (the other models do not simulate)",
                                  param_hint="--robust")  # fmt: skip
+    if scheduler is not None:
+        refuse_options(ctx, ["workers"], "does not apply with --scheduler (the cluster's workers run the drops)")
     physics = {} if physics_profile is None else load_profile(physics_profile).as_dict()
     throws = [load_profile(p, base=physics).as_dict() for p in STANDARD] if robust else []
     family = None if family_name == "auto" else family_name
     ensure_dir(out_dir)
     err = console(stderr=True)
-    say = (lambda text: err.print(text)) if not as_json else None
-    found = synthesize(
-        goal, faces=faces, family=family, fill=made, model=model, budget_seconds=budget * 60, seed=seed,
-        name=name or "die", size_mm=size_mm, min_margin=min_margin, workers=workers, progress=say,
-        settings=PhysicsSettings.from_mapping(physics), throws=throws,
-    )  # fmt: skip
+    say = (lambda text: err.print(text, markup=False)) if not as_json else None
+    with _Stages(err if not as_json else None) as stages:
+        found = synthesize(
+            goal, faces=faces, family=family, fill=made, model=model,
+            budget_seconds=None if budget is None else budget * 60, max_drops=max_drops, tolerance=tolerance,
+            seed=seed, name=name or "die", size_mm=size_mm, min_margin=min_margin, workers=workers,
+            scheduler=scheduler, progress=say, ticker=stages.tick, settings=PhysicsSettings.from_mapping(physics),
+            throws=throws,
+        )  # fmt: skip
     d = replace(
         found.design,
         physics=physics,
@@ -133,26 +163,26 @@ def design(target, faces, family_name, model, budget, name, seed, size_mm, min_m
         output_path(out_dir, d.name, ".toml"),
         design_to_toml(
             d,
-            comment=f"Written by: diefab design {target} --model {model} --seed {seed}"
+            comment=f"Written by: diefab design {target} --model {model} --seed {seed} --max-drops {max_drops}"
             + (f" --fill {made.kind}" if made.kind != "solid" else "")
             + how,
         ),  # fmt: skip
     )
     aligned = goal.aligned(d.support)
-    validated = None
+    validated, verdict, agreement = None, None, None
     if validate_sims:
-        check_seed = seed + 1_000_003  # never used by the search (its drops use seed .. seed + steps)
-        checks = []
-        for throw in throws or [d.physics]:
-            result = simulate(d, validate_sims, seed=check_seed, workers=workers,
-                              settings=PhysicsSettings.from_mapping(throw))  # fmt: skip
-            fit = goodness_of_fit(result.value_counts(d), aligned, seed=check_seed)
-            checks.append({"n": result.n, "landed": result.landed, "seed": check_seed, "tvd": fit.tvd,
-                           "p_value": fit.p_value})  # fmt: skip
-        validated = max(checks, key=lambda c: c["tvd"])
+        with _Stages(err if not as_json else None) as stages:
+            tell = lambda done, total: stages.tick("closing check", done, total)  # noqa: E731
+            validated = closing_check(d, validate_sims, seed, throws=throws, workers=workers, scheduler=scheduler,
+                                      progress=tell)  # fmt: skip
+        agreement = fast_agreement(d, validated["probabilities"])
+        verdict = judge(goal, validated, tolerance, method=found.method, nearest=found.nearest,
+                        simulated_tvd=found.simulated_tvd, drops=found.drops,
+                        max_drops=max_drops if model == "simulation" else None)  # fmt: skip
         if throws:
-            validated = {**validated, "profiles": dict(zip(STANDARD, checks)),
-                         "worst_profile": STANDARD[checks.index(validated)]}  # fmt: skip
+            worst = max(range(len(throws)), key=lambda i: validated["throws"][i]["tvd"])
+            validated = {**validated, "profiles": dict(zip(STANDARD, validated.pop("throws"))),
+                         "worst_profile": STANDARD[worst]}  # fmt: skip
     report = {
         "design_file": str(path),
         "family": d.family,
@@ -165,13 +195,28 @@ def design(target, faces, family_name, model, budget, name, seed, size_mm, min_m
         "method": found.method,
         "objective": float(pearson_divergence(found.predicted, aligned)),
         "tvd": float(tvd(found.predicted, aligned)),
+        "simulated_tvd": found.simulated_tvd,
+        "fast": None if agreement is None else {
+            "predicted": {str(v): float(p) for v, p in zip(d.support, agreement["fast"])},
+            "tvd": float(tvd(agreement["fast"], aligned)),
+            "tvd_to_simulation": agreement["tvd_between"],
+            "trusted": agreement["trusted"],
+        },
+        "nearest_counted": None if found.nearest is None else {
+            "kind": found.nearest.kind, "faces": found.nearest.faces, "tvd": float(found.nearest.tvd)},
         "validated": validated,
+        "tolerance": tolerance,
+        "within_tolerance": None if verdict is None else verdict.met,
+        "verdict": None if verdict is None else verdict.why,
+        "max_drops": max_drops,
+        "drops": found.drops,
+        "reproducible": not found.capped,
         "physics": physics_profile,
         "robust": robust,
         "tried": found.tried,
         "refinement": found.steps,
         "seconds": time.monotonic() - t0,
-    }
+    }  # fmt: skip
     if report_file is not None:
         from diefab.fabricate.report import design_report, render_report
 
@@ -179,10 +224,52 @@ def design(target, faces, family_name, model, budget, name, seed, size_mm, min_m
         report["report"] = str(atomic_write(report_file, page.encode("utf-8"), inputs=[path]))
     if as_json:
         emit_json(report)
-        return
-    _print_report(d, report, path)
-    if report_file is not None:
-        console().print(f"wrote {report['report']}")
+    else:
+        _print_report(d, report, path)
+        if report_file is not None:
+            console().print(f"wrote {report['report']}")
+    if found.capped:
+        click.echo(f"diefab: note: the --budget wall-time cap of {budget:g} minutes ended the search early: this "
+                   "die depends on the machine's speed and is not reproducible from the seed and options; drop "
+                   "--budget (or lower --max-drops) for a reproducible run", err=True)  # fmt: skip
+    if verdict is not None and not verdict.met:
+        click.echo(f"diefab: {verdict.why}. The die is written to {path}, but it does not roll like {target} "
+                   f"within --tolerance {tolerance:g} (exit status {EXIT_ABOVE_TOLERANCE})", err=True)  # fmt: skip
+        raise click.exceptions.Exit(EXIT_ABOVE_TOLERANCE)
+    if validated is None:
+        click.echo("diefab: note: --validate-sims 0 skips the closing check, so nothing checked the die against "
+                   "--tolerance", err=True)  # fmt: skip
+
+
+class _Stages:
+    """A progress bar with an ETA per stage of the search (on a terminal only)."""
+
+    def __init__(self, con) -> None:
+        import sys
+
+        self.bar = None
+        self.tasks: dict[str, int] = {}
+        if con is not None and sys.stderr.isatty():
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+            self.bar = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                                TimeRemainingColumn(), console=con, transient=True)  # fmt: skip
+
+    def __enter__(self) -> _Stages:
+        if self.bar is not None:
+            self.bar.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self.bar is not None:
+            self.bar.stop()
+
+    def tick(self, stage: str, done: int, total: int) -> None:
+        if self.bar is None:
+            return
+        if stage not in self.tasks:
+            self.tasks[stage] = self.bar.add_task(stage, total=total)
+        self.bar.update(self.tasks[stage], completed=done, total=total)
 
 
 def _print_report(d, report: dict, path: Path) -> None:
@@ -207,6 +294,14 @@ def _print_report(d, report: dict, path: Path) -> None:
         )
     con.print(table)
     con.print(f"Eq. (2) {report['objective']:.5f}, TVD {report['tvd']:.4f} under the {report['model']} model")
+    fast = report["fast"]
+    if fast is not None:
+        trust = "" if fast["trusted"] else " [bold]not trusted for this die[/bold]"
+        con.print(f"fast model: TVD {fast['tvd']:.4f} to the target, {fast['tvd_to_simulation']:.4f} from the "
+                  f"closing check's drops{trust}")  # fmt: skip
+    if report["nearest_counted"] is not None and report["method"] == "shaped":
+        n = report["nearest_counted"]
+        con.print(f"nearest counted die: {n['faces']}-face {n['kind']}, TVD {n['tvd']:.4f} (exact)")
     v = report["validated"]
     if v and "profiles" in v:
         for profile, c in v["profiles"].items():

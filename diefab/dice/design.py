@@ -16,6 +16,7 @@ Examples
 from __future__ import annotations
 
 import math
+import re
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -514,11 +515,21 @@ def list_templates() -> list[Design]:
 
 
 def template_path(name: str):
-    """The path of the shipped template called `name`."""
-    path = _templates_dir() / f"{name}.toml"
+    """The path of the shipped template called `name`, or of the ready-made die for the target `name`.
+
+    A target is looked up by its spelling in lower case with every run of
+    other characters than letters and digits made one ``-``: ``3dF`` is
+    the template ``3df``, ``binomial:4`` is ``binomial-4``.
+    """
+    folder = _templates_dir()
+    path = folder / f"{name}.toml"
     if not path.is_file():
-        known = ", ".join(sorted(p.name[:-5] for p in _templates_dir().iterdir() if p.name.endswith(".toml")))
-        raise DesignError(f"unknown template {name!r} (templates: {known}; or give a path to a .toml file)")
+        slug = re.sub(r"[^a-z0-9]+", "-", str(name).lower()).strip("-")
+        path = folder / f"{slug}.toml"
+    if not path.is_file():
+        known = ", ".join(sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml")))
+        raise DesignError(f"unknown template {name!r} (templates: {known}; or give a path to a .toml file; "
+                          f"or make a die for any target with: diefab design TARGET)")  # fmt: skip
     return path
 
 

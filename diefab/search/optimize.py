@@ -270,6 +270,7 @@ def optimize_design(
     correction: np.ndarray | None = None,
     deadline: float | None = None,
     read_by: Sequence[str] = KINDS,
+    budget: int | None = None,
 ) -> OptimizationResult:
     """Multi-start Nelder--Mead over the family's parameters.
 
@@ -293,6 +294,10 @@ def optimize_design(
     deadline : float, optional
         A :func:`time.monotonic` time: the search stops there with the best
         point seen so far.
+    budget : int, optional
+        Most evaluations over all starts: the search stops after them with
+        the best point seen so far (unlike `deadline`, the result is then a
+        function of the inputs alone).
 
     Returns
     -------
@@ -318,9 +323,14 @@ def optimize_design(
     best_x, best_f, feasible = None, np.inf, 0
     seen = {"x": None, "f": np.inf}
 
+    spent = [0]
+
     def score(x: np.ndarray) -> float:
         if deadline is not None and time.monotonic() > deadline:
             raise _OutOfTime
+        if budget is not None and spent[0] >= budget:
+            raise _OutOfTime
+        spent[0] += 1
         f = problem.evaluate(problem.params(x))[0]
         if f < seen["f"]:
             seen["x"], seen["f"] = np.clip(x, 0, 1), f

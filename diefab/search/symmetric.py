@@ -143,11 +143,12 @@ def _fair_shapes(faces: int) -> tuple[tuple[str, tuple[tuple[str, float], ...]],
         return ()
     bound = known[key]
 
+    @cache  # the grid's points and the bounded search's are each built once
     def shape(x: float) -> Polyhedron:
         return fam.polyhedron({"n": n, key: float(x)})
 
     grid = np.linspace(bound.lower, bound.upper, 97)
-    ok = [x for x in grid if _aspect(shape(x)) <= MAX_ASPECT]
+    ok = [float(x) for x in grid if _aspect(shape(float(x))) <= MAX_ASPECT]
     if not ok:
         return ()
     score = [tipping_angle(p, p.centroid) for p in map(shape, ok)]
@@ -155,7 +156,7 @@ def _fair_shapes(faces: int) -> tuple[tuple[str, tuple[tuple[str, float], ...]],
     lo, hi = ok[max(i - 1, 0)], ok[min(i + 1, len(ok) - 1)]
     if hi > lo:
         best = minimize_scalar(
-            lambda x: -tipping_angle(shape(x), shape(x).centroid), bounds=(lo, hi), method="bounded",
+            lambda x: -tipping_angle(shape(float(x)), shape(float(x)).centroid), bounds=(lo, hi), method="bounded",
             options={"xatol": 1e-6},
         )  # fmt: skip
         x, angle = (float(best.x), -best.fun) if -best.fun >= score[i] else (float(ok[i]), score[i])
@@ -265,13 +266,20 @@ def _split_counts(weights: np.ndarray, x: int, y: int, n: int) -> tuple[tuple[in
     return (alpha, beta) if sum(beta) == n else None
 
 
-def two_class_plans(target: Target, max_faces: int = MAX_FACES) -> list[TwoClass]:
-    """Two-class dice that roll `target` exactly at the right share, fewest faces first, then share nearest 1/2."""
+def two_class_plans(target: Target, max_faces: int = MAX_FACES, enough: int | None = None) -> list[TwoClass]:
+    """Two-class dice that roll `target` exactly at the right share, fewest faces first, then share nearest 1/2.
+
+    With `enough`, the search stops after the first face count at which
+    that many plans have been found (the list then starts as it would
+    without it).
+    """
     d = denominator(target)
     if d is None:
         return []
     plans = []
     for faces in range(6, max_faces + 1, 2):
+        if enough is not None and len(plans) >= enough:
+            break
         n = faces // 2
         for scale in range(1, 4):
             total, rest = divmod(scale * d, n)  # x + y
@@ -307,6 +315,8 @@ class Tuning:
     value: float
     #: (parameter value, top-half share, landed drops) of each simulation.
     evaluations: list[tuple[float, float, int]]
+    #: True if the wall-time cap, not the drop budget or convergence, ended the search.
+    capped: bool = False
 
 
 def _root(points: list[tuple[float, float, int]], goal: float) -> float | None:
@@ -336,7 +346,8 @@ def tune_share(
     goal: float,
     *,
     slope: float,
-    deadline: float,
+    max_drops: int = 64_000,
+    deadline: float = float("inf"),
     drops: tuple[int, ...] = (1000, 2000, 3000, 4000, 6000),
     seed: int = 0,
     say: Callable[[str], None] = lambda text: None,
@@ -358,8 +369,12 @@ def tune_share(
         First value (a model's guess).
     slope : float
         A model's d(share)/d(value) near `start`, for the first step.
-    deadline : float
-        ``time.monotonic()`` after which no new step starts.
+    max_drops : int
+        Most drops in all: no step starts that would exceed it (the first
+        always runs).  The result is a function of this budget and `seed`.
+    deadline : float, optional
+        ``time.monotonic()`` after which no new step starts: a wall-time cap
+        (:attr:`Tuning.capped` says it ended the search).
 
     Returns
     -------
@@ -370,14 +385,16 @@ def tune_share(
     lo, hi = bounds
     span = hi - lo
     points: list[tuple[float, float, int]] = []
-    value, per_drop = float(np.clip(start, lo, hi)), 0.0
+    value, used, capped = float(np.clip(start, lo, hi)), 0, False
     for step in range(32):
         n = drops[min(step, len(drops) - 1)]
-        if points and time.monotonic() + per_drop * n > deadline:
+        if points and used + n > max_drops:
             break
-        t0 = time.monotonic()
+        if points and time.monotonic() > deadline:
+            capped = True
+            break
         share, landed = share_of(value, n, seed)
-        per_drop = (time.monotonic() - t0) / n
+        used += n
         points.append((value, share, landed))
         error = 1.96 * np.sqrt(goal * (1 - goal) / max(landed, 1))
         say(f"tuning: {value:.4f} gives the top half {share:.4f} of {landed} landings (goal {goal:.4f} ± {error:.4f})")
@@ -397,4 +414,4 @@ def tune_share(
     settled = _root(points, goal) if len(points) > 1 else None
     if settled is None or not lo <= settled <= hi:
         settled = min(points, key=lambda e: abs(e[1] - goal))[0]
-    return Tuning(float(settled), points)
+    return Tuning(float(settled), points, capped)

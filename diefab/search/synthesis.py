@@ -17,11 +17,17 @@
    is optimized under `model` and -- with ``model="simulation"`` -- refined
    against pybullet: it drops the die, adds the simulated-minus-modelled face
    frequencies to the model as a correction, re-optimizes, and repeats while
-   time is left, keeping the design whose simulated distance to the target
-   is smallest.
+   drops are left and the simulated distance to the target is above the
+   goal, keeping the design whose simulated distance is smallest;
+4. when no fair or two-class die is exact, the one whose face counts come
+   nearest (:mod:`diefab.search.counting`) is weighed against the shaped
+   die, and the nearer is kept.
 
-``faces`` and ``family`` narrow the candidates (``faces=11`` for 2d6 asks for
-a shaped die).  The caller validates the result on a fresh seed.
+Every stage's budget is in model evaluations or drops, so the result is a
+function of the target, the options and the seed.  ``faces`` (resting
+faces) and ``family`` narrow the candidates (``faces=11`` for 2d6 asks for a
+shaped die).  The caller validates the result on a fresh seed
+(:func:`diefab.search.verdict.closing_check`).
 
 Examples
 --------
@@ -54,6 +60,7 @@ from diefab.geometry.polyhedron import resting_faces
 from diefab.made.fill import Fill
 from diefab.made.mass import mass_properties
 from diefab.models.probabilities import MODELS, model_probabilities, value_probabilities
+from diefab.search.counting import Counted, nearest_dice
 from diefab.search.optimize import INFEASIBLE, optimize_design
 from diefab.search.symmetric import (
     MAX_FACES,
@@ -79,12 +86,21 @@ RANK_MODEL = "fast"
 RANK_DECIMALS = 3
 #: Drops per simulation of a refinement step (half at the first).
 REFINE_DROPS = 16_000
-#: Shortest re-optimization of a refinement step, seconds.
-MIN_STEP_SECONDS = 10.0
-#: Most refinement steps.
-REFINE_STEPS = 6
-#: Refinement stops once the simulated TVD is below this.
+#: Refinement stops once the simulated TVD is below this (or below the tolerance, if smaller).
 REFINE_GOAL = 0.008
+#: Drops the search may spend by default (the two-class tuning's, or the refinement's); the closing check
+#: comes on top.
+MAX_DROPS = 64_000
+#: Model evaluations of each candidate's ranking under the solid-angle model (three starts and a restart).
+RANK_EVALUATIONS = 2400
+#: Model evaluations of the polish of the ranked winner under the fast model.
+POLISH_EVALUATIONS = 3000
+#: Model evaluations of each refinement step's re-optimization under the corrected fast model.
+STEP_EVALUATIONS = 1000
+#: Drops the refinement of a shaped die leaves for tuning the nearest two-class die it is weighed against.
+COUNTED_RESERVE = 10_000
+#: Default tolerance: a validated TVD above it is a die that does not roll like its target.
+TOLERANCE = 0.02
 #: Fewest drops under each of several throws in a refinement step.
 MIN_THROW_DROPS = 4_000
 #: Smallest tipping angle (degrees) a two-class die's tuning may reach.
@@ -206,7 +222,7 @@ def _fair(target: Target, faces: int | None) -> list[Candidate]:
 
 def _two_class(target: Target, faces: int | None) -> list[Candidate]:
     """Two-class dice that roll `target` once their top half's share is tuned (with `faces` faces, if given)."""
-    plans = two_class_plans(target, max(MAX_FACES, faces or 0))
+    plans = two_class_plans(target, max(MAX_FACES, faces or 0), enough=2 if faces is None else None)
     return [Candidate(p.family, p.params, p.faces, plan=p) for p in plans if faces in (None, p.faces)][:2]
 
 
@@ -243,6 +259,14 @@ class Synthesis:
     steps: list[dict] = field(default_factory=list)
     #: How the die carries the target: "fair", "two-class" or "shaped".
     method: str = "shaped"
+    #: True if the wall-time cap ended a stage early: the same seed and options may then give another die.
+    capped: bool = False
+    #: The fair or two-class die whose face counts come nearest the target (:mod:`diefab.search.counting`), if any.
+    nearest: Counted | None = None
+    #: Drops the search spent.
+    drops: int = 0
+    #: The simulated TVD of the die kept (the refinement's or the two-class tuning's), if it was simulated.
+    simulated_tvd: float | None = None
 
 
 def _start(candidate: Candidate, target: Target, name: str, fill: Fill, size_mm: float) -> Design:
@@ -273,23 +297,37 @@ def synthesize(
     family: str | None = None,
     fill: Fill | None = None,
     model: str = "simulation",
-    budget_seconds: float = 480.0,
+    budget_seconds: float | None = None,
+    max_drops: int = MAX_DROPS,
+    tolerance: float = TOLERANCE,
     seed: int = 0,
     name: str = "die",
     size_mm: float = 30.0,
     min_margin: float = 0.05,
     workers: int | None = None,
+    scheduler=None,
     settings=None,
     progress: Callable[[str], None] | None = None,
+    ticker: Callable[[str, int, int], None] | None = None,
     throws: Sequence[Mapping[str, Any]] = (),
 ) -> Synthesis:
     """Design a die for `target`.
 
-    Every candidate (:func:`candidates`) is optimized under the solid-angle
-    model, which is cheap, in an equal share of the time; the best (by
-    objective to :data:`RANK_DECIMALS` decimals, then by fewest faces read at
-    a vertex or edge, then by fewest transitional faces, then by fewest
-    faces) is then optimized under `model`.
+    A fair or two-class die that carries the target exactly is taken first.
+    Otherwise every shaped candidate (:func:`candidates`) is optimized under
+    the solid-angle model, which is cheap, for :data:`RANK_EVALUATIONS`
+    evaluations; the best (by objective to :data:`RANK_DECIMALS` decimals,
+    then by fewest faces read at a vertex or edge, then by fewest
+    transitional faces, then by fewest faces) is then optimized under
+    `model`, and weighed against the fair or two-class die whose face counts
+    come nearest the target (:func:`diefab.search.counting.nearest_dice`): the one
+    nearer the target is kept.
+
+    The result is a function of the target, the options and `seed` alone:
+    every stage has a budget in model evaluations or drops, and the drops
+    give the same counts whatever `workers` or `scheduler`.  Only
+    `budget_seconds`, a wall-time cap, can end a stage early; then
+    :attr:`Synthesis.capped` is True.
 
     Parameters
     ----------
@@ -297,12 +335,25 @@ def synthesize(
         The landing model optimized (``basins`` when registered in
         :data:`diefab.models.probabilities.MODELS`); ``simulation`` optimizes the fast
         model and then refines it against pybullet drops.
-    budget_seconds : float
-        Wall time for the whole search; each stage stops when its share runs out.
+    budget_seconds : float, optional
+        Wall-time cap of the whole search (default none).
+    max_drops : int
+        Drops the search may spend (a two-class die's tuning, or a shaped
+        die's refinement).
+    tolerance : float
+        The refinement goes on, while drops are left, until the simulated
+        TVD is below the smaller of this and :data:`REFINE_GOAL`.
     seed : int
         Seeds the optimizer's random starts and the refinement's drops.
+    scheduler : str or distributed.Client, optional
+        Run the drops on this Dask cluster.
     settings : PhysicsSettings, optional
         The physics the drops of ``simulation`` use (default: the design's).
+    progress : callable(str), optional
+        Told what each stage found, one line at a time.
+    ticker : callable(stage, done, total), optional
+        Told how far each stage is: candidates ranked, or drops spent out of
+        `max_drops`.
     throws : sequence of mapping, optional
         Physics settings to refine a shaped die against all at once (a
         robust design; they replace `settings` there): each refinement step
@@ -317,30 +368,54 @@ def synthesize(
     """
     fill = fill or Fill()
     say = progress or (lambda text: None)
-    t0 = time.monotonic()
+    tick = ticker or (lambda stage, done, total: None)
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise DesignError(f"seed={seed!r} must be an integer >= 0")
+    if isinstance(max_drops, bool) or not isinstance(max_drops, (int, np.integer)) or max_drops < 1:
+        raise DesignError(f"max_drops={max_drops!r} must be a positive integer")
+    if not (np.isfinite(tolerance) and 0 < tolerance < 1):
+        raise DesignError(f"tolerance={tolerance!r} must be in (0, 1)")
+    if budget_seconds is not None and not budget_seconds > 0:
+        raise DesignError(f"budget_seconds={budget_seconds!r} must be positive")
+    deadline = time.monotonic() + (budget_seconds if budget_seconds is not None else np.inf)
     final_model = RANK_MODEL if model == "simulation" else model
     if final_model not in MODELS:
         raise DesignError(f"model {model!r} is not available (models: {', '.join([*MODELS, 'simulation'])})")
-    pool = candidates(target, faces, family)
+    run = _Run(seed, max_drops, deadline, workers, scheduler, settings, say, tick)
+    try:
+        pool = candidates(target, faces, family)
+    except DesignError as exc:
+        raise DesignError(f"{exc}{_nearest_faces(target, faces)}") from None
     fair = _fair_design(next((c for c in pool if c.exact), None), target, name, fill, size_mm, final_model, say)
     if fair is not None:
         return fair
     for cand in (c for c in pool if c.plan is not None):
-        found = _two_class_design(cand, target, name, fill, size_mm, model, t0 + budget_seconds, seed, workers,
-                                  settings, say)  # fmt: skip
+        found = _two_class_design(cand, target, name, fill, size_mm, model, run)
         if found is not None:
             return found
+    nearest = _nearest(target, faces, family)
+    if nearest is not None:
+        say(f"nearest counted die: {nearest.faces}-face {nearest.kind}, TVD {float(nearest.tvd):.4f} "
+            "by exact arithmetic")  # fmt: skip
+    if nearest is not None and nearest.tvd <= tolerance / 2:  # near enough: no shaped die to weigh it against
+        counted = _counted_design(nearest, target, name, fill, size_mm, model, final_model, run)
+        if counted is not None:
+            return counted
     pool = [c for c in pool if not c.exact and c.plan is None]
-    rank_share = {"simulation": 0.2, "solid-angle": 1.0}.get(model, 0.6) * budget_seconds
+    if not pool:
+        counted = None if nearest is None else _counted_design(nearest, target, name, fill, size_mm, model,
+                                                                final_model, run)  # fmt: skip
+        if counted is not None:
+            return counted
+        raise DesignError(f"no die found for target {target.spec!r}{_why_not(target, faces, family)}")
     best, best_key, tried = None, None, []
     for i, cand in enumerate(pool):
-        deadline = t0 + rank_share * (i + 1) / len(pool)
+        tick("ranking candidates", i, len(pool))
         try:
             start = _start(cand, target, name, fill, size_mm)
             result = optimize_design(start, model="solid-angle", min_margin=min_margin, starts=2, seed=seed,
-                                     name=name, deadline=deadline)  # fmt: skip
+                                     name=name, deadline=deadline, max_evaluations=RANK_EVALUATIONS // 4,
+                                     budget=RANK_EVALUATIONS)  # fmt: skip
         except DesignError as exc:
             tried.append({"family": cand.family, "faces": cand.faces, "objective": None, "error": str(exc)})
             say(f"{cand.family} ({cand.faces} faces): {exc}")
@@ -352,31 +427,134 @@ def synthesize(
         say(f"{cand.family} ({cand.faces} faces): Eq. (2) {result.objective:.5f} under the solid-angle model")
         if best is None or key < best_key:
             best, best_key = result, key
+    tick("ranking candidates", len(pool), len(pool))
+    run.note_cap()
     if best is None or best.objective >= INFEASIBLE:
-        raise DesignError(f"no stable, readable die found for target {target.spec!r} (tried {len(tried)} dice)")
-    if final_model != "solid-angle":
-        polish = t0 + (rank_share + (0.1 if model == "simulation" else 0.4) * budget_seconds)
-        try:
-            again = optimize_design(best.design, model=final_model, min_margin=min_margin, starts=0, seed=seed,
-                                    name=name, deadline=polish)  # fmt: skip
-            say(f"{again.design.family}: Eq. (2) {again.objective:.5f} under the {final_model} model")
-            best = again
-        except DesignError as exc:
-            say(f"the {final_model} model finds no stable die from the solid-angle optimum: {exc}")
+        counted = None if nearest is None else _counted_design(nearest, target, name, fill, size_mm, model,
+                                                                final_model, run)  # fmt: skip
+        if counted is not None:
+            return counted
+        cut = "; the wall-time cap ended the search early" if run.capped else ""
+        raise DesignError(f"no stable, readable die found for target {target.spec!r} (tried {len(tried)} dice)"
+                          f"{cut}{_nearest_faces(target, faces)}")  # fmt: skip
+    # the polish: under the final model, from the ranked winner
+    try:
+        again = optimize_design(best.design, model=final_model, min_margin=min_margin, starts=0, seed=seed,
+                                name=name, deadline=deadline, budget=POLISH_EVALUATIONS)  # fmt: skip
+        say(f"{again.design.family}: Eq. (2) {again.objective:.5f} under the {final_model} model")
+        best = again
+    except DesignError as exc:
+        say(f"the {final_model} model finds no stable die from the solid-angle optimum: {exc}")
+    run.note_cap()
     out = Synthesis(best.design, best.objective, best.values, final_model, tried)
     if model == "simulation":
-        _refine(out, target, t0 + budget_seconds, seed, min_margin, workers, settings, say, throws)
+        # drops kept back to tune the nearest counted die, if it has to be weighed against this one
+        reserve = min(COUNTED_RESERVE, max_drops // 4) if nearest is not None and nearest.plan is not None else 0
+        run.max_drops -= reserve
+        _refine(out, target, min_margin, run, min(REFINE_GOAL, tolerance), throws)
+        run.max_drops += reserve
+    out.nearest, out.capped, out.drops = nearest, run.capped, run.used
+    shaped = out.simulated_tvd if out.simulated_tvd is not None else float(tvd(out.predicted,
+                                                                               target.aligned(out.design.support)))
+    if nearest is not None and float(nearest.tvd) < shaped:
+        say(f"the nearest counted die (TVD {float(nearest.tvd):.4f}) is nearer the target than the shaped die "
+            f"({shaped:.4f})")  # fmt: skip
+        counted = _counted_design(nearest, target, name, fill, size_mm, model, final_model, run)
+        if counted is not None and (counted.simulated_tvd is None or counted.simulated_tvd < shaped):
+            counted.tried = tried + counted.tried
+            return counted
     return out
 
 
-def _fair_design(
-    cand: Candidate | None, target: Target, name: str, fill: Fill, size_mm: float, model: str, say
+@dataclass
+class _Run:
+    """What every stage of one search shares: its seed, drop budget, wall-time cap, workers and reporters."""
+
+    seed: int
+    max_drops: int
+    deadline: float
+    workers: int | None
+    scheduler: Any
+    settings: Any
+    say: Callable[[str], None]
+    tick: Callable[[str, int, int], None]
+    used: int = 0
+    capped: bool = False
+
+    def note_cap(self) -> None:
+        """Record that the wall-time cap has passed (the stage that just ended may have been cut)."""
+        self.capped = self.capped or time.monotonic() > self.deadline
+
+    def simulate(self, design: Design, n: int, seed: int, stage: str, settings=None):
+        """Drop `design` `n` times, counting the drops against the budget and ticking `stage`."""
+        from diefab.physics.simulate import simulate
+
+        before = self.used
+        result = simulate(design, n, seed=seed, workers=self.workers, scheduler=self.scheduler,
+                          settings=settings if settings is not None else self.settings,
+                          progress=lambda done, total: self.tick(stage, min(before + done, self.max_drops),
+                                                                 self.max_drops))  # fmt: skip
+        self.used += n
+        self.tick(stage, min(self.used, self.max_drops), self.max_drops)
+        return result
+
+
+def _nearest(target: Target, faces: int | None, family: str | None) -> Counted | None:
+    """The fair or two-class die nearest `target` (with `faces` faces, of `family`, if given), or None."""
+    found = nearest_dice(target, MAX_FACES if faces is None else max(MAX_FACES, faces), faces)
+    if family is not None:
+        found = [c for c in found if (c.plan.family if c.plan else _fair_family(c.faces)) == family]
+    return found[0] if found else None
+
+
+def _nearest_faces(target: Target, faces: int | None) -> str:
+    """What the counted dice with the face count nearest `faces` reach, as a clause for a refusal."""
+    if faces is None:
+        return ""
+    found = nearest_dice(target)
+    if not found:
+        return ""
+    near = min(found, key=lambda c: (abs(c.faces - faces), c.tvd))
+    best = found[0]
+    text = f"; the nearest face count, {near.faces}, reaches TVD {float(near.tvd):.4f} ({near.kind} die)"
+    if best is not near:
+        text += f", and {best.faces} faces reach {float(best.tvd):.4f} ({best.kind})"
+    return text
+
+
+def _fair_family(faces: int) -> str | None:
+    shapes = fair_shapes(faces)
+    return shapes[0][0] if shapes else None
+
+
+def _counted_design(
+    nearest: Counted, target: Target, name: str, fill: Fill, size_mm: float, model: str, final_model: str, run
 ) -> Synthesis | None:
-    """The fair die of `cand` with its faces counted out to `target`, or None if it cannot be read."""
+    """The fair or two-class die of `nearest`, which rolls `target` only approximately, or None if unreadable."""
+    if nearest.plan is not None:
+        cand = Candidate(nearest.plan.family, nearest.plan.params, nearest.faces, plan=nearest.plan)
+        found = _two_class_design(cand, target, name, fill, size_mm, model, run)
+    else:
+        family, params = fair_shapes(nearest.faces)[0]
+        cand = Candidate(family, params, nearest.faces, exact=True)
+        found = _fair_design(cand, target, name, fill, size_mm, final_model, run.say, np.array(nearest.counts))
+    if found is not None:
+        found.nearest = nearest
+        found.capped = found.capped or run.capped
+        found.drops = run.used
+    return found
+
+
+def _fair_design(
+    cand: Candidate | None, target: Target, name: str, fill: Fill, size_mm: float, model: str, say,
+    counts: np.ndarray | None = None,
+) -> Synthesis | None:
+    """The fair die of `cand` with its faces counted out to `target` (or by `counts`), or None if unreadable."""
     if cand is None:
         return None
     poly = cand.polyhedron()
-    values = fair_values(poly, target, face_counts(target, cand.faces))
+    exact = counts is None
+    values = fair_values(poly, target, face_counts(target, cand.faces) if exact else counts)
     why = unreadable(poly, values)
     if why is not None:
         say(f"{cand.family} ({cand.faces} faces, fair): {why}")
@@ -384,9 +562,11 @@ def _fair_design(
     d = Design(name, cand.family, cand.params, values=values, target=target.spec, fill=fill, size_mm=size_mm)
     predicted = value_probabilities(d, model)
     objective = pearson_divergence(predicted, target.aligned(d.support))
-    say(f"{cand.family} ({cand.faces} faces): fair by symmetry, its faces counted out to the target exactly")
+    near = 0.0 if exact else float(tvd(counts / cand.faces, target.probabilities))
+    how = "exactly" if exact else f"as near as {cand.faces} faces come (TVD {near:.4f})"
+    say(f"{cand.family} ({cand.faces} faces): fair by symmetry, its faces counted out to the target {how}")
     tried = [{"family": cand.family, "faces": cand.faces, "objective": objective, "fair": True}]
-    return Synthesis(d, objective, predicted, model, tried, method="fair")
+    return Synthesis(d, objective, predicted, model, tried, method="fair" if exact else "fair-nearest")
 
 
 def _two_class_design(
@@ -396,14 +576,12 @@ def _two_class_design(
     fill: Fill,
     size_mm: float,
     model: str,
-    deadline: float,
-    seed: int,
-    workers,
-    settings,
-    say,
+    run: _Run,
 ) -> Synthesis | None:
     """The two-class die of `cand`, its share tuned under `model` (by drops for ``simulation``), or None."""
+    say, seed = run.say, run.seed
     plan = cand.plan
+    exact = bool(np.allclose(_per_value(plan, plan.share), target.probabilities, atol=1e-9))
     fam = get_family(cand.family)
     lo, hi = fam.bounds([plan.other])[0]
     poly0 = cand.polyhedron()
@@ -451,13 +629,14 @@ def _two_class_design(
     steps: list[dict] = []
     value = guess
     if model == "simulation":
-        from diefab.physics.simulate import simulate
 
         def share_of(v: float, n: int, s: int) -> tuple[float, int]:
-            sim = simulate(build(v), n, seed=s, workers=workers, settings=settings)
+            sim = run.simulate(build(v), n, s, "tuning the share")
             return float(sim.face_counts[: plan.n].sum() / max(sim.landed, 1)), int(sim.landed)
 
-        tuning = tune_share(share_of, guess, (lo, hi), plan.share, slope=slope, deadline=deadline, seed=seed, say=say)
+        tuning = tune_share(share_of, guess, (lo, hi), plan.share, slope=slope, max_drops=run.max_drops - run.used,
+                            deadline=run.deadline, seed=seed, say=say)  # fmt: skip
+        run.capped = run.capped or tuning.capped
         value = tuning.value
         goal = target.aligned(target.values)
         steps = [
@@ -475,9 +654,11 @@ def _two_class_design(
         predicted = value_probabilities(d, rank)
     objective = pearson_divergence(predicted, target.aligned(d.support))
     tried = [{"family": cand.family, "faces": cand.faces, "objective": objective, "two_class": True}]
-    return Synthesis(
-        d, objective, predicted, "simulation" if model == "simulation" else rank, tried, steps, "two-class"
-    )
+    found = Synthesis(d, objective, predicted, "simulation" if model == "simulation" else rank, tried, steps,
+                      "two-class" if exact else "two-class-nearest", capped=run.capped, drops=run.used)  # fmt: skip
+    if model == "simulation":
+        found.simulated_tvd = float(tvd(predicted, target.aligned(d.support)))
+    return found
 
 
 def _per_value(plan: TwoClass, share: float) -> np.ndarray:
@@ -500,59 +681,63 @@ def _not_on_faces(design: Design) -> int:
 def _refine(
     out: Synthesis,
     target: Target,
-    deadline: float,
-    seed: int,
     min_margin: float,
-    workers,
-    settings,
-    say,
+    run: _Run,
+    goal_tvd: float,
     throws: Sequence[Mapping[str, Any]] = (),
 ) -> None:
-    """Correct the model by simulation until the simulated TVD is small or time runs out (updates `out`).
+    """Correct the model by simulation until the simulated TVD is below `goal_tvd` or the drops run out.
 
-    The drops use `settings`; with `throws`, every step drops the die under
-    each instead (a share of the drops each, at least
-    :data:`MIN_THROW_DROPS`) and its TVD is the worst.
+    Updates `out`.  The drops use the run's settings; with `throws`, every
+    step drops the die under each instead (a share of the drops each, at
+    least :data:`MIN_THROW_DROPS`) and its TVD is the worst.
     """
-    from diefab.physics.simulate import PhysicsSettings, simulate
+    from diefab.physics.simulate import PhysicsSettings
 
     goal = target.aligned(out.design.support)
     design, objective, predicted = out.design, out.objective, out.predicted
     best_tvd = np.inf
-    per_drop = 0.0
-    runs = [PhysicsSettings.from_mapping(t) for t in throws] or [settings]
+    runs = [PhysicsSettings.from_mapping(t) for t in throws] or [None]
 
     def step_drops(step: int) -> int:
         drops = REFINE_DROPS if step else REFINE_DROPS // 2
         return max(drops // len(runs), MIN_THROW_DROPS) if len(runs) > 1 else drops
 
-    for step in range(REFINE_STEPS):
+    step = 0
+    while True:
         drops = step_drops(step)
-        if time.monotonic() + per_drop * drops * len(runs) > deadline:
+        if not step:  # the first step judges the model's die: within the budget, however small
+            drops = min(drops, (run.max_drops - run.used) // len(runs))
+        if drops < 1 or (step and run.used + drops * len(runs) > run.max_drops):
             break
-        sims = [simulate(design, drops, seed=seed + step, workers=workers, settings=s) for s in runs]
-        per_drop = sum(sim.seconds for sim in sims) / drops / len(sims)
+        if step and time.monotonic() > run.deadline:
+            run.capped = True
+            break
+        sims = [run.simulate(design, drops, run.seed + step, "refinement drops", settings=s) for s in runs]
         each = [float(tvd(sim.value_probabilities(design), goal)) for sim in sims]
         distance = max(each)
+        kept = distance < best_tvd
         out.steps.append({"step": step, "drops": drops, "params": dict(design.params), "simulated_tvd": distance,
-                          **({"throw_tvds": each} if len(sims) > 1 else {})})  # fmt: skip
+                          "kept": kept, **({"throw_tvds": each} if len(sims) > 1 else {})})  # fmt: skip
         worst = " (worst of " + ", ".join(f"{v:.4f}" for v in each) + ")" if len(sims) > 1 else ""
-        say(f"refinement {step}: simulated TVD {distance:.4f}{worst} at {drops} drops")
-        if distance < best_tvd:
+        run.say(f"refinement {step}: simulated TVD {distance:.4f}{worst} at {drops} drops")
+        if kept:
             best_tvd = distance
             out.design, out.objective, out.predicted = design, objective, predicted
-        if distance < REFINE_GOAL or time.monotonic() > deadline:
+            out.simulated_tvd = distance
+        if distance < goal_tvd or run.used + step_drops(step + 1) * len(runs) > run.max_drops:
             break
         body = design.mass_properties()
         modelled = model_probabilities(RANK_MODEL, design.polyhedron, body, design.fill)
         correction = np.array([sim.face_probabilities for sim in sims]) - modelled  # one row per throw
         try:
-            # leave time for the next simulation, which judges this step
-            stop = max(time.monotonic() + MIN_STEP_SECONDS, deadline - per_drop * step_drops(step + 1) * len(runs))
-            result = optimize_design(design, model=RANK_MODEL, min_margin=min_margin, starts=0, seed=seed,
-                                     name=design.name, correction=correction, deadline=stop)  # fmt: skip
+            result = optimize_design(design, model=RANK_MODEL, min_margin=min_margin, starts=0, seed=run.seed,
+                                     name=design.name, correction=correction, deadline=run.deadline,
+                                     budget=STEP_EVALUATIONS)  # fmt: skip
         except DesignError:
             break
+        run.note_cap()
         design = replace(result.design, description=design.description)
         objective, predicted = result.objective, result.values
+        step += 1
     out.model = "simulation"

@@ -1,0 +1,143 @@
+"""The limit of what diefab design can do, measured over a wide set of targets.
+
+    nice -n 10 python benchmarks/bench_targets.py                 # every target not yet measured
+    nice -n 10 python benchmarks/bench_targets.py 2d6 3d6         # only these
+    nice -n 10 python benchmarks/bench_targets.py --drops 10000   # a quicker validation
+
+For each target, at default options (``python -m diefab design TARGET
+--seed 1 --validate-sims 0 --json``), it records the die (family, face
+count, how it carries the target), the design time, the TVD at a fresh
+validation (``python -m diefab validate DIE --sims 30000 --seed 7``, a seed
+no search uses), and the best TVD any fair or two-class die of at most 60
+steady faces reaches by exact arithmetic (:func:`diefab.counting.nearest_dice`).
+Each target's row is written to ``benchmarks/results/targets.json`` as it
+finishes, so the run resumes where it stopped; ``--table`` prints the
+Markdown table of what is there.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+RESULTS = ROOT / "benchmarks" / "results" / "targets.json"
+TARGETS = [
+    "2d4", "2d6", "3d6", "2d8", "2d10", "4dF", "3dF",
+    *(f"binomial:{n}" for n in range(3, 9)),
+    *(f"uniform:{n}" for n in range(3, 13)),
+    "1:3,2:3,3:3,4:3,5:3,6:5",  # a loaded d6
+    "1:32,2:16,3:8,4:4,5:2,6:1",  # geometric, ratio 1/2
+    "1:4,2:2,3:1,4:1,5:2,6:4",  # bimodal
+    "1:1,2:2,3:3,4:4,5:5,6:6",
+]  # fmt: skip
+SEED = 1
+CHECK_SEED = 7
+
+
+def _diefab(args: list[str]) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "diefab", *args], cwd=ROOT, capture_output=True, text=True)
+
+
+def counted(target: str) -> dict | None:
+    """The fair or two-class die of at most 60 steady faces nearest `target`, by exact arithmetic."""
+    from diefab.dice.targets import parse_target
+    from diefab.search.counting import nearest_dice
+
+    best = nearest_dice(parse_target(target))
+    return {"kind": best[0].kind, "faces": best[0].faces, "tvd": float(best[0].tvd)} if best else None
+
+
+def measure(target: str, drops: int) -> dict:
+    nearest = counted(target)
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.monotonic()
+        done = _diefab(["design", target, "--seed", str(SEED), "--validate-sims", "0", "--out", tmp, "--json"])
+        seconds = time.monotonic() - t0
+        if done.returncode != 0:
+            return {"target": target, "error": (done.stderr.strip().splitlines() or ["?"])[-1],
+                    "design_seconds": round(seconds, 1), "nearest_counted": nearest}  # fmt: skip
+        report = json.loads(done.stdout)
+        check = _diefab(["validate", report["design_file"], "--sims", str(drops), "--seed", str(CHECK_SEED), "--json"])
+        fit = json.loads(check.stdout) if check.returncode == 0 else {}
+    return {
+        "target": target,
+        "family": report["family"],
+        "faces": len(report["values"]),
+        "method": report["method"],
+        "design_seconds": round(seconds, 1),
+        "validated_drops": fit.get("n"),
+        "validated_tvd": fit.get("tvd"),
+        "expected_tvd": fit.get("expected_tvd"),
+        "nearest_counted": nearest,
+        "cpus": os.cpu_count(),
+    }
+
+
+def _save(results: dict) -> None:
+    RESULTS.parent.mkdir(parents=True, exist_ok=True)
+    part = RESULTS.with_suffix(".json.part")
+    part.write_text(json.dumps(results, indent=2) + "\n")
+    part.replace(RESULTS)
+
+
+def table(results: dict) -> str:
+    rows = ["| target | die | faces | design s | validated TVD (drops) | nearest counted die (exact TVD) |",
+            "|---|---|---|---|---|---|"]  # fmt: skip
+    for target in TARGETS:
+        r = results.get(target)
+        if r is None:
+            continue
+        n = r.get("nearest_counted")
+        near = f"{n['faces']}-face {n['kind']}, {n['tvd']:.4f}" if n else "none"
+        if "family" not in r and "error" not in r:
+            rows.append(f"| {target} | not run | | | | {near} |")
+            continue
+        if "error" in r:
+            rows.append(f"| {target} | refused: {r['error']} | | {r['design_seconds']:.0f} | | {near} |")
+            continue
+        tvd = "—" if r["validated_tvd"] is None else f"{r['validated_tvd']:.4f} ({r['validated_drops']})"
+        rows.append(f"| {target} | {r['family']} ({r['method']}) | {r['faces']} | {r['design_seconds']:.0f} | {tvd} "
+                    f"| {near} |")  # fmt: skip
+    return "\n".join(rows)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("targets", nargs="*", help="Targets to measure (default: all not yet measured)")
+    parser.add_argument("--drops", type=int, default=30_000, help="Drops of the validation (default 30000)")
+    parser.add_argument("--force", action="store_true", help="Measure again targets already measured")
+    parser.add_argument("--table", action="store_true", help="Print the Markdown table of the results and stop")
+    parser.add_argument("--counted-only", action="store_true",
+                        help="Only the nearest counted die of each target (exact arithmetic, no drops)")  # fmt: skip
+    args = parser.parse_args()
+    results = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {}
+    if args.table:
+        print(table(results))
+        return
+    if args.counted_only:
+        for target in args.targets or TARGETS:
+            results.setdefault(target, {"target": target})["nearest_counted"] = counted(target)
+            print(table({target: results[target]}).splitlines()[-1], flush=True)
+        _save(results)
+        return
+    print(f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f}; validation at {args.drops} drops",
+          flush=True)  # fmt: skip
+    for target in args.targets or TARGETS:
+        if ("family" in results.get(target, {}) or "error" in results.get(target, {})) and not args.force:
+            continue
+        results[target] = measure(target, args.drops)
+        _save(results)
+        print(table({target: results[target]}).splitlines()[-1], flush=True)
+    print(table(results))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,84 @@
+"""Nearest counted dice: exact arithmetic on face counts, and the verdict that names a die's limit."""
+
+from fractions import Fraction
+from itertools import combinations_with_replacement
+
+import numpy as np
+import pytest
+
+from diefab.dice.targets import parse_target
+from diefab.search.counting import exact_probabilities, nearest_counts, nearest_dice, nearest_two_class
+from diefab.search.verdict import judge, smallest_probability
+
+
+def _brute_force(goal: list[Fraction], faces: int) -> Fraction:
+    """The least TVD over every way to count `faces` faces onto the values, each at least one."""
+    k = len(goal)
+    best = None
+    for extra in combinations_with_replacement(range(k), faces - k):
+        counts = np.bincount(np.array(extra, dtype=int), minlength=k) + 1
+        d = sum(abs(Fraction(int(c), faces) - g) for c, g in zip(counts, goal)) / 2
+        best = d if best is None or d < best else best
+    return best
+
+
+@pytest.mark.parametrize(("spec", "faces"), [("2d6", 12), ("2d6", 14), ("3dF", 8), ("4dF", 12), ("binomial:3", 10),
+                                             ("1:1,2:2,3:3,4:4", 9), ("uniform:5", 8)])  # fmt: skip
+def test_nearest_counts_are_the_least_tvd_by_brute_force(spec, faces):
+    target = parse_target(spec)
+    counts, distance = nearest_counts(target, faces)
+    assert counts.sum() == faces and counts.min() >= 1
+    assert distance == _brute_force(exact_probabilities(target), faces)
+
+
+@pytest.mark.slow  # finds the steadiest fair shape of every face count
+def test_exact_targets_have_distance_zero():
+    assert nearest_counts(parse_target("binomial:4"), 16)[1] == 0
+    assert nearest_counts(parse_target("uniform:7"), 14)[1] == 0
+    best = nearest_dice(parse_target("2d6"))[0]
+    assert best.tvd == 0 and best.kind == "two-class" and best.faces == 24
+
+
+def test_a_two_class_die_rolls_the_distance_it_claims():
+    target = parse_target("3d6")
+    found = nearest_two_class(target, 24)
+    plan = found.plan
+    assert sum(plan.alpha) == plan.n == sum(plan.beta) and min(a + b for a, b in zip(plan.alpha, plan.beta)) >= 1
+    rolled = found.probabilities()
+    assert rolled.sum() == pytest.approx(1.0)
+    assert 0.5 * np.abs(rolled - target.probabilities).sum() == pytest.approx(float(found.tvd), abs=1e-12)
+
+
+@pytest.mark.slow  # finds the steadiest fair shape of every face count
+def test_many_small_probabilities_are_beyond_a_counted_die():
+    target = parse_target("3d6")
+    assert smallest_probability(target) == (Fraction(1, 216), 3)
+    best = nearest_dice(target)[0]
+    # the least a steady face lands with is min(share, 1 - share) / n >= 0.3 / 13, far above 1/216
+    assert best.tvd > Fraction(1, 20)
+
+
+@pytest.mark.slow  # finds the steadiest fair shape of every face count
+def test_the_verdict_names_the_limit_and_passes_a_die_within_tolerance():
+    target = parse_target("3d6")
+    check = {"tvd": 0.07, "n": 10_000, "expected_tvd": 0.01}
+    verdict = judge(target, check, 0.02, method="two-class-nearest")
+    assert not verdict.met and "1/216" in verdict.why and "0.0700" in verdict.why
+    assert judge(target, {**check, "tvd": 0.015}, 0.02, method="shaped").met
+    noisy = judge(parse_target("2d6"), {"tvd": 0.05, "n": 300, "expected_tvd": 0.04}, 0.02, method="two-class")
+    assert not noisy.met and "--validate-sims" in noisy.why
+
+
+def test_the_fast_model_is_not_trusted_where_it_differs_from_the_drops():
+    from diefab.dice.design import load_design
+    from diefab.search.verdict import FAST_TRUST, fast_agreement
+
+    d = load_design("d6")  # a cube: the fast model gives 1/6 a face
+    goal = d.target_distribution.aligned(d.support)
+    near = fast_agreement(d, goal)
+    assert near["trusted"] and near["tvd_between"] < 1e-3
+    skewed = goal.copy()
+    skewed[0] += 2 * FAST_TRUST
+    skewed[-1] -= 2 * FAST_TRUST
+    far = fast_agreement(d, skewed)
+    assert not far["trusted"] and far["tvd_between"] == pytest.approx(2 * FAST_TRUST, abs=1e-3)
