@@ -183,6 +183,15 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
             worst = max(range(len(throws)), key=lambda i: validated["throws"][i]["tvd"])
             validated = {**validated, "profiles": dict(zip(STANDARD, validated.pop("throws"))),
                          "worst_profile": STANDARD[worst]}  # fmt: skip
+    said = None
+    if validated is not None and "profiles" not in validated:  # the plain verdict on the closing check's drops
+        from diefab.stats.sequential import sequential_counts
+        from diefab.stats.verdict import target_label
+        from diefab.stats.verdict import verdict as plain_verdict
+
+        counts = np.rint(np.asarray(validated["probabilities"]) * validated["landed"]).astype(int)
+        said = plain_verdict(counts, aligned, target_label(target), p_value=validated["p_value"],
+                             sequential=sequential_counts(counts, aligned, tolerance)).text  # fmt: skip
     report = {
         "design_file": str(path),
         "family": d.family,
@@ -208,6 +217,7 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
         "tolerance": tolerance,
         "within_tolerance": None if verdict is None else verdict.met,
         "verdict": None if verdict is None else verdict.why,
+        "plain_verdict": said,
         "max_drops": max_drops,
         "drops": found.drops,
         "reproducible": not found.capped,
@@ -311,4 +321,6 @@ def _print_report(d, report: dict, path: Path) -> None:
     elif v:
         under = f" under {report['physics']}" if report["physics"] else ""
         con.print(f"validated{under}: {v['n']} drops (seed {v['seed']}), TVD {v['tvd']:.4f}, p = {v['p_value']:.3g}")
+    if report["plain_verdict"]:
+        con.print(f"verdict: {report['plain_verdict']}")
     con.print(f"wrote {path} ({report['seconds']:.0f} s)")
