@@ -1,0 +1,1 @@
+"""The die as it is made: what fabrication adds to the ideal polyhedron (markers, labels, tabs)."""
