@@ -45,8 +45,10 @@ __all__ = [
 DEFAULT_FOV = 65.0
 #: Confidence below which a frame is unread.
 MIN_CONFIDENCE = 0.5
-#: A marker agrees with a pose when its corners reproject within this fraction of its image side (or 2 px).
+#: A marker agrees with a pose when its corners reproject within this fraction of its image side.
 INLIER_FRACTION = 0.12
+#: The same for the pose of one marker alone, before it is refined on every marker that agrees.
+COARSE_FRACTION = 0.6
 #: Half the angle between the chosen face and the next, in degrees, at which the choice is fully trusted.
 SAFE_DEG = 9.0
 #: The chosen face's tilt from straight down (degrees) up to which it lies flat, and beyond which it cannot.
@@ -231,35 +233,48 @@ def solve_pose(
             candidates.append((j, rotation, translation, fit, float(e)))
     if not candidates:
         return None
-    tolerance = INLIER_FRACTION
 
-    def score(c):
+    def score(c, tolerance):
         inliers = c[3] <= tolerance
         return (int(inliers.sum()), -float(np.where(inliers, c[3], 0).sum()))
 
-    candidates.sort(key=score, reverse=True)
+    # a small marker's pose is coarse: gather the markers that roughly agree, refine on them, then keep those
+    # that agree closely with the refined pose
+    candidates.sort(key=lambda c: score(c, COARSE_FRACTION), reverse=True)
     best = candidates[0]
-    inliers = np.flatnonzero(best[3] <= tolerance)
+    rotation, translation = best[1], best[2]
+    inliers = np.flatnonzero(best[3] <= COARSE_FRACTION)
+    for _ in range(3):
+        if len(inliers) >= 2:
+            rotation, translation = _refine(objects[inliers], images[inliers], rotation, translation, camera)
+        fit = _agreement(rotation, translation, objects, images, normals, camera)
+        close = np.flatnonzero(fit <= INLIER_FRACTION)
+        if np.array_equal(close, inliers):
+            break
+        inliers = close
     if len(inliers) == 0:
         return None
-    rotation, translation = best[1], best[2]
     alternative = None
-    if len(inliers) >= 2:
-        rvec = cv2.Rodrigues(rotation)[0]
-        ok, rvec, tvec = cv2.solvePnP(
-            objects[inliers].reshape(-1, 3), images[inliers].reshape(-1, 2), camera.matrix, camera.distortion,
-            rvec, translation.reshape(3, 1).copy(), useExtrinsicGuess=True, flags=cv2.SOLVEPNP_ITERATIVE,
-        )  # fmt: skip
-        if ok:
-            rotation, translation = cv2.Rodrigues(rvec)[0], tvec.ravel()
-    else:
-        same = [c for c in candidates[1:] if c[0] == best[0]]
+    if len(inliers) == 1:
+        same = [c for c in candidates[1:] if c[0] == inliers[0]]
         if same and same[0][4] < 4.0 * max(best[4], 0.05):
             alternative = same[0][1]  # the other planar solution of the only marker fits about as well
     proj = _project(objects[inliers].reshape(-1, 3), rotation, translation, camera)
     error = float(np.sqrt(np.mean(np.sum((proj - images[inliers].reshape(-1, 2)) ** 2, axis=1))))
     scale = float(np.linalg.norm(images[inliers] - np.roll(images[inliers], 1, axis=1), axis=2).mean())
     return Pose(rotation, translation, tuple(int(m) for m in marker_ids[inliers]), error, scale, alternative)
+
+
+def _refine(objects, images, rotation, translation, camera):
+    """Rotation and translation refined (Levenberg-Marquardt) over the corners of several markers."""
+    import cv2
+
+    rvec = cv2.Rodrigues(rotation)[0]
+    ok, rvec, tvec = cv2.solvePnP(
+        objects.reshape(-1, 3), images.reshape(-1, 2), camera.matrix, camera.distortion,
+        rvec, translation.reshape(3, 1).copy(), useExtrinsicGuess=True, flags=cv2.SOLVEPNP_ITERATIVE,
+    )  # fmt: skip
+    return (cv2.Rodrigues(rvec)[0], tvec.ravel()) if ok else (rotation, translation)
 
 
 def _resting(rotation: np.ndarray, normals: np.ndarray, down: np.ndarray) -> tuple[int, float, float]:

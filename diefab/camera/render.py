@@ -59,7 +59,8 @@ class Conditions:
     noise: float = 0.0  # sensor noise sigma, gray levels
     jpeg: int = 0  # JPEG quality (0: none)
     finger: tuple[float, float, float, float] | None = None  # x, y (pixels) of the tip, angle (rad), width (px)
-    seed: int = 0
+    seed: int = 0  # sensor noise and the finger's skin
+    table_seed: int = 0  # the table's texture (fixed for a fixed camera)
 
 
 def rest_pose(design: Design, face: int, yaw: float, at=(0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
@@ -118,6 +119,7 @@ def random_conditions(rng: np.random.Generator, view: View, *, finger: float = 0
         jpeg=int(rng.integers(70, 96)),
         finger=tip,
         seed=int(rng.integers(2**31)),
+        table_seed=int(rng.integers(2**31)),
     )
 
 
@@ -144,7 +146,7 @@ def render(
 
     rng = np.random.default_rng(conditions.seed)
     w, h = view.width, view.height
-    image = _table(rng, w, h, conditions.table)
+    image = _table(np.random.default_rng(conditions.table_seed), w, h, conditions.table)
     poly = design.polyhedron
     s = design.mm_per_unit
     r_cam, t_cam = view.to_camera(rotation, position)
