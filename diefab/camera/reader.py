@@ -168,6 +168,15 @@ class RollReader:
         return read, self.settler.feed(self.frame, read, moving=False)
 
 
+    def feed_rest(self, gray: np.ndarray) -> tuple[FrameRead, Roll]:
+        """Read a photo of the die at rest (no motion or settle): one roll per photo, unread when unsure."""
+        self.frame += 1
+        self.box = None  # each photo is its own scene
+        read = self.read(gray)
+        self.last = read
+        return read, Roll(self.frame, read.value, read.face, read.confidence)
+
+
 def frames(*, camera: int | None = None, video: str | Path | None = None, images: str | Path | None = None) -> Iterator[tuple[float, np.ndarray]]:
     """(time in seconds, grayscale frame) from exactly one source.
 

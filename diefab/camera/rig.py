@@ -99,8 +99,9 @@ def roll_video(
     table = random_conditions(rng, view, finger=0.0)
     plans = []
     for i in range(drops):
-        drop = simulated_drop(design, seed, i, fps=fps, at=_spot(rng, view))
-        plans.append(drop)
+        drop = simulated_drop(design, seed, i, fps=fps)
+        shift = np.append(_spot(rng, view) - drop.positions[-1][:2], 0.0)  # the die comes to rest in view
+        plans.append(replace(drop, positions=drop.positions + shift))
     truth = [None if d.face is None else design.values.get(design.polyhedron.names[d.face]) for d in plans]
 
     def frames() -> Iterator[VideoFrame]:

@@ -6,7 +6,7 @@ whether the frame moved, and says when a roll is over:
 * any motion (the image changed, or the die's pose moved) starts a new
   settle window, and arms the next count;
 * once the scene has been still for `settle` frames, an armed settle gives
-  one :class:`Roll`: its value when at least half the window's frames read
+  one :class:`Roll` (as soon as any marker is in view): its value when at least half the window's frames read
   the same face at the reader's confidence and none read another, else
   ``unread`` (value None) -- a die in motion, a hand over it, a pose that
   does not say one face clearly is never guessed;
@@ -96,12 +96,13 @@ class Settler:
             self.armed = True
             return None
         self.window.append(read)
+        del self.window[: -self.settle]
         if not self.armed or len(self.window) < self.settle:
             return None
-        self.armed = False
-        window = self.window[-self.settle :]
+        window = self.window
         if not any(r.detected for r in window):
-            return None  # nothing of the die in view: no roll to count
+            return None  # nothing of the die in view yet: keep looking
+        self.armed = False
         reads = [r for r in window if r.face is not None]
         faces = Counter(r.face for r in reads)
         if len(faces) == 1 and 2 * len(reads) >= len(window):

@@ -21,6 +21,7 @@ from .design import design
 from .net import net
 from .optimize import optimize
 from .predict import predict, templates
+from .read import read
 from .stats import stats
 from .stl import stl
 from .validate import validate
@@ -34,7 +35,7 @@ def cli() -> None:
     """Design, simulate and fabricate dice with unequal face probabilities."""
 
 
-for _command in (templates, predict, stats, design, optimize, validate, calibrate, net, stl):
+for _command in (templates, predict, stats, design, optimize, validate, calibrate, net, stl, read):
     cli.add_command(_command)
 
 
