@@ -18,8 +18,6 @@ from __future__ import annotations
 import argparse
 import time
 
-import numpy as np
-
 
 def dice():
     from diefab import Design, load_design
@@ -28,7 +26,12 @@ def dice():
         name="bipyramid-24", family="bipyramid", params={"n": 12, "h": 1.0},
         values={f"f{i + 1}": i + 1 for i in range(24)}, target="uniform:24", size_mm=30.0,
     )  # fmt: skip
-    return {"gem": load_design("fudge-gem"), "d6": load_design("d6"), "bipyramid24": bipyramid, "d20": load_design("d20")}
+    return {
+        "gem": load_design("fudge-gem"),
+        "d6": load_design("d6"),
+        "bipyramid24": bipyramid,
+        "d20": load_design("d20"),
+    }
 
 
 def bench_rests(design, n: int, seed: int) -> dict:

@@ -43,6 +43,8 @@ __all__ = [
 
 #: Horizontal field of view assumed for an uncalibrated camera, degrees (a typical webcam).
 DEFAULT_FOV = 65.0
+#: Straight down in camera coordinates for a camera looking straight down.
+DOWN = (0.0, 0.0, 1.0)
 #: Confidence below which a frame is unread.
 MIN_CONFIDENCE = 0.5
 #: A marker agrees with a pose when its corners reproject within this fraction of its image side.
@@ -131,7 +133,9 @@ class MarkerDetector:
         params.minMarkerPerimeterRate = 0.02
         params.adaptiveThreshWinSizeMax = 33
         self._cv2 = cv2
-        self._detector = cv2.aruco.ArucoDetector(cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, layout.dictionary)), params)
+        self._detector = cv2.aruco.ArucoDetector(
+            cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, layout.dictionary)), params
+        )
         self._others: list | None = None
 
     def detect(self, gray: np.ndarray, roi: tuple[int, int, int, int] | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -290,7 +294,7 @@ def _ramp(x: float, full: float, zero: float) -> float:
     return float(np.clip((zero - x) / (zero - full), 0.0, 1.0))
 
 
-def read_pose(pose: Pose, design: Design, down: np.ndarray = np.array([0.0, 0.0, 1.0])) -> tuple[int, float]:
+def read_pose(pose: Pose, design: Design, down: np.ndarray = DOWN) -> tuple[int, float]:
     """The resting face of `pose` and the confidence of that reading.
 
     The confidence is the product of three ramps: half the angle between
@@ -324,7 +328,7 @@ def read_frame(
     *,
     roi: tuple[int, int, int, int] | None = None,
     min_confidence: float = MIN_CONFIDENCE,
-    down: np.ndarray = np.array([0.0, 0.0, 1.0]),
+    down: np.ndarray = DOWN,
 ) -> FrameRead:
     """Detect, solve and read one grayscale frame (uint8, (h, w))."""
     ids, corners = detector.detect(gray, roi)

@@ -54,7 +54,9 @@ class _Motion:
         import cv2
 
         h, w = gray.shape
-        small = cv2.resize(gray, (w // MOTION_SCALE, h // MOTION_SCALE), interpolation=cv2.INTER_AREA).astype(np.float32)
+        small = cv2.resize(gray, (w // MOTION_SCALE, h // MOTION_SCALE), interpolation=cv2.INTER_AREA).astype(
+            np.float32
+        )
         small /= max(float(small.mean()), 1.0)
         prev, self.previous = self.previous, small
         if prev is None or prev.shape != small.shape:
@@ -167,7 +169,6 @@ class RollReader:
         self.last = read
         return read, self.settler.feed(self.frame, read, moving=False)
 
-
     def feed_rest(self, gray: np.ndarray) -> tuple[FrameRead, Roll]:
         """Read a photo of the die at rest (no motion or settle): one roll per photo, unread when unsure."""
         self.frame += 1
@@ -177,7 +178,9 @@ class RollReader:
         return read, Roll(self.frame, read.value, read.face, read.confidence)
 
 
-def frames(*, camera: int | None = None, video: str | Path | None = None, images: str | Path | None = None) -> Iterator[tuple[float, np.ndarray]]:
+def frames(
+    *, camera: int | None = None, video: str | Path | None = None, images: str | Path | None = None
+) -> Iterator[tuple[float, np.ndarray]]:
     """(time in seconds, grayscale frame) from exactly one source.
 
     A camera's time is the wall clock since the first frame, a video's its
@@ -223,7 +226,9 @@ def frames(*, camera: int | None = None, video: str | Path | None = None, images
             ok, image = capture.read()
             if not ok:
                 if first:
-                    raise SourceError(f"{'video ' + str(video) if video is not None else f'camera {camera}'} gives no frame")
+                    raise SourceError(
+                        f"{'video ' + str(video) if video is not None else f'camera {camera}'} gives no frame"
+                    )
                 return
             first = False
             t = capture.get(cv2.CAP_PROP_POS_MSEC) / 1000 if video is not None else time.monotonic() - start

@@ -161,12 +161,16 @@ def render(
     world = poly.vertices * s @ rotation.T + position
     foot = world[:, :2].mean(axis=0)
     spread = float(np.ptp(world[:, :2], axis=0).max()) / 2
-    ring = np.array([[foot[0] + spread * math.cos(a), foot[1] + spread * math.sin(a), 0.0] for a in np.linspace(0, 2 * math.pi, 24)])
+    ring = np.array(
+        [[foot[0] + spread * math.cos(a), foot[1] + spread * math.sin(a), 0.0] for a in np.linspace(0, 2 * math.pi, 24)]
+    )
     shadow_cam = (ring - view.position) @ view.rotation.T
     uv = shadow_cam @ k.T
     shadow = np.zeros((h, w), np.float32)
     cv2.fillPoly(shadow, [np.round(uv[:, :2] / uv[:, 2:3] * 16).astype(np.int32)], 1.0, cv2.LINE_AA, shift=4)
-    shadow = cv2.GaussianBlur(shadow, (0, 0), max(2.0, 0.15 * spread * k[0, 0] / max(float(shadow_cam[:, 2].mean()), 1.0)))
+    shadow = cv2.GaussianBlur(
+        shadow, (0, 0), max(2.0, 0.15 * spread * k[0, 0] / max(float(shadow_cam[:, 2].mean()), 1.0))
+    )
     image *= 1.0 - 0.45 * shadow
 
     light = np.asarray(conditions.light, dtype=float)
@@ -288,5 +292,7 @@ def draw_detection(gray: np.ndarray, read, design: Design, layout: MarkerLayout,
     for p, color in zip(pts[1:], ((0, 0, 255), (0, 255, 0), (255, 0, 0))):
         cv2.line(image, tuple(int(v) for v in pts[0]), tuple(int(v) for v in p), color, 2, cv2.LINE_AA)
     text = "unread" if read.value is None else f"{design.polyhedron.names[read.face]}: {read.value}"
-    cv2.putText(image, f"{text}  ({read.confidence:.2f})", (20, 40), cv2.FONT_HERSHEY_SIMPLEX, 1.0, (0, 0, 255), 2, cv2.LINE_AA)
+    cv2.putText(
+        image, f"{text}  ({read.confidence:.2f})", (20, 40), cv2.FONT_HERSHEY_SIMPLEX, 1.0, (0, 0, 255), 2, cv2.LINE_AA
+    )
     return image

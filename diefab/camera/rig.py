@@ -67,7 +67,9 @@ def _finger(rng: np.random.Generator, centre: np.ndarray, radius: float, reach=(
     return (float(tip[0]), float(tip[1]), float(angle), float(radius * rng.uniform(0.5, 0.8)))
 
 
-def rendered_rests(design: Design, layout: MarkerLayout, n: int, seed: int, *, finger: float = 0.15) -> Iterator[RenderedRest]:
+def rendered_rests(
+    design: Design, layout: MarkerLayout, n: int, seed: int, *, finger: float = 0.15
+) -> Iterator[RenderedRest]:
     """`n` rendered rests; each draws its own view and conditions from ``(seed, i)``."""
     poly = design.polyhedron
     resting = [k for k, name in enumerate(poly.names) if name in design.values]
@@ -113,11 +115,19 @@ def roll_video(
             if previous is not None:
                 centre, radius = _image_circle(design, view, *previous)
                 for _ in range(3):
-                    hand = replace(base, finger=_finger(frng, centre, radius, (-0.3, 0.3)), seed=int(frng.integers(2**31)))
+                    hand = replace(
+                        base, finger=_finger(frng, centre, radius, (-0.3, 0.3)), seed=int(frng.integers(2**31))
+                    )
                     yield VideoFrame(render(design, layout, view, *previous, hand, textures=textures), i, False)
             for _ in range(2):
                 away = (np.eye(3), np.array([0.0, 0.0, -1e4]))  # the die out of the picture, below the table
-                yield VideoFrame(render(design, layout, view, *away, replace(base, seed=int(frng.integers(2**31))), textures=textures), i, False)
+                yield VideoFrame(
+                    render(
+                        design, layout, view, *away, replace(base, seed=int(frng.integers(2**31))), textures=textures
+                    ),
+                    i,
+                    False,
+                )
             last = len(drop.rotations) - 1
             for k in range(last + 1 + hold):
                 j = min(k, last)
@@ -128,7 +138,9 @@ def roll_video(
                     c = replace(base, motion=tuple(0.5 * (step - here)), seed=int(frng.integers(2**31)))
                 else:
                     c = replace(base, seed=int(frng.integers(2**31)))
-                yield VideoFrame(render(design, layout, view, drop.rotations[j], drop.positions[j], c, textures=textures), i, rest)
+                yield VideoFrame(
+                    render(design, layout, view, drop.rotations[j], drop.positions[j], c, textures=textures), i, rest
+                )
             previous = (drop.rotations[last], drop.positions[last])
 
     return view, truth, frames()

@@ -107,7 +107,11 @@ class Settler:
         faces = Counter(r.face for r in reads)
         if len(faces) == 1 and 2 * len(reads) >= len(window):
             last = reads[-1]
-            if self.last_rest is not None and last.pose is not None and same_rest(last.pose, self.last_rest, self.size_mm):
+            if (
+                self.last_rest is not None
+                and last.pose is not None
+                and same_rest(last.pose, self.last_rest, self.size_mm)
+            ):
                 return None
             self.last_rest = last.pose
             confidence = float(np.median([r.confidence for r in reads]))

@@ -11,7 +11,9 @@ from .common import design_argument, get_design, out_option
 
 @click.command("read")
 @design_argument
-@click.option("--camera", "camera_index", type=click.IntRange(0, 99), default=None, help="Camera number (0: the first).")
+@click.option(
+    "--camera", "camera_index", type=click.IntRange(0, 99), default=None, help="Camera number (0: the first)."
+)
 @click.option("--video", type=click.Path(path_type=Path), default=None, help="Video file to read.")
 @click.option("--images", type=click.Path(path_type=Path), default=None, help="Folder of images, read in name order.")
 @click.option("--name", default=None, help="Roll log name (default: the design's): OUT/NAME-rolls.csv.")

@@ -154,7 +154,9 @@ def _largest_square(region, center) -> float:
     lo, hi = 0.0, max(x1 - x0, y1 - y0)
     for _ in range(40):
         mid = 0.5 * (lo + hi)
-        if region.contains(shapely.box(center[0] - mid / 2, center[1] - mid / 2, center[0] + mid / 2, center[1] + mid / 2)):
+        if region.contains(
+            shapely.box(center[0] - mid / 2, center[1] - mid / 2, center[0] + mid / 2, center[1] + mid / 2)
+        ):
             lo = mid
         else:
             hi = mid
