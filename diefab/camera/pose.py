@@ -51,12 +51,17 @@ MIN_CONFIDENCE = 0.5
 INLIER_FRACTION = 0.12
 #: The same for the pose of one marker alone, before it is refined on every marker that agrees.
 COARSE_FRACTION = 0.6
-#: Half the angle between the chosen face and the next, in degrees, at which the choice is fully trusted.
-SAFE_DEG = 9.0
+#: Half the angle between the chosen face and the next, in standard errors of the pose's rotation, at which
+#: the choice is fully trusted, and below which it is not at all.
+SAFE_SIGMAS = (3.0, 1.5)
+#: The same half angle in degrees, whatever the standard error.
+SAFE_DEG = (5.0, 2.0)
+#: Corner scatter assumed at least, pixels, and the rotation error an uncalibrated lens adds, degrees.
+CORNER_PX, LENS_DEG = 0.2, 1.0
 #: The chosen face's tilt from straight down (degrees) up to which it lies flat, and beyond which it cannot.
 FLAT_DEG = (12.0, 24.0)
 #: Reprojection error, as a fraction of the markers' image size, fully trusted and not at all.
-REPROJECTION = (0.03, 0.10)
+REPROJECTION = (0.08, 0.16)
 
 
 class MarkerError(DiefabError, ValueError):
@@ -86,8 +91,9 @@ class Pose:
 
     rotation : (3, 3) float, model coordinates -> camera; translation : (3,) float, mm (the model origin).
     markers : ids of the markers that agree with the pose; error : RMS reprojection error, pixels;
-    scale : mean image side of those markers, pixels; ambiguous : a one-marker pose whose other planar
-    solution fits almost as well.
+    scale : mean image side of those markers, pixels; alternative : the other planar solution (rotation) of a
+    one-marker pose when it fits almost as well; spread_deg : the rotation's standard error, degrees (from the
+    solve's Jacobian and the corners' scatter).
     """
 
     rotation: np.ndarray
@@ -96,6 +102,7 @@ class Pose:
     error: float
     scale: float
     alternative: np.ndarray | None = None
+    spread_deg: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -266,7 +273,29 @@ def solve_pose(
     proj = _project(objects[inliers].reshape(-1, 3), rotation, translation, camera)
     error = float(np.sqrt(np.mean(np.sum((proj - images[inliers].reshape(-1, 2)) ** 2, axis=1))))
     scale = float(np.linalg.norm(images[inliers] - np.roll(images[inliers], 1, axis=1), axis=2).mean())
-    return Pose(rotation, translation, tuple(int(m) for m in marker_ids[inliers]), error, scale, alternative)
+    spread = _rotation_spread(objects[inliers].reshape(-1, 3), rotation, translation, camera, error)
+    ids_in = tuple(int(m) for m in marker_ids[inliers])
+    return Pose(rotation, translation, ids_in, error, scale, alternative, spread)
+
+
+def _rotation_spread(objects, rotation, translation, camera, error: float) -> float:
+    """Standard error of the pose's rotation, degrees: corner scatter through the solve's Jacobian.
+
+    The corners scatter by the RMS reprojection error (at least :data:`CORNER_PX`); an uncalibrated lens
+    adds :data:`LENS_DEG`.
+    """
+    import cv2
+
+    rvec = cv2.Rodrigues(rotation)[0]
+    _, jacobian = cv2.projectPoints(objects, rvec, translation.reshape(3, 1), camera.matrix, camera.distortion)
+    j = jacobian[:, :6]
+    sigma = max(error, CORNER_PX)
+    try:
+        cov = sigma**2 * np.linalg.inv(j.T @ j)
+    except np.linalg.LinAlgError:
+        return 90.0
+    worst = float(np.sqrt(max(np.linalg.eigvalsh(cov[:3, :3]).max(), 0.0)))
+    return float(np.hypot(np.degrees(worst), LENS_DEG))
 
 
 def _refine(objects, images, rotation, translation, camera):
@@ -299,7 +328,9 @@ def read_pose(pose: Pose, design: Design, down: np.ndarray = DOWN) -> tuple[int,
 
     The confidence is the product of three ramps: half the angle between
     the chosen face and the next one (the pose error that would flip the
-    choice, :data:`SAFE_DEG`), the chosen face's tilt from `down`
+    choice) in standard errors of the pose's rotation (:data:`SAFE_SIGMAS`)
+    and in degrees (:data:`SAFE_DEG`),
+    the chosen face's tilt from `down`
     (:data:`FLAT_DEG`: a die leaning on something is not at rest on a face)
     and the reprojection error relative to the markers' image size
     (:data:`REPROJECTION`).  A one-marker pose whose other planar solution
@@ -312,11 +343,23 @@ def read_pose(pose: Pose, design: Design, down: np.ndarray = DOWN) -> tuple[int,
     """
     poly = design.polyhedron
     down = np.asarray(down, dtype=float) / np.linalg.norm(down)
-    face, a1, a2 = _resting(pose.rotation, poly.normals, down)
-    confidence = _ramp((a2 - a1) / 2, SAFE_DEG, 0.0) * _ramp(a1, *FLAT_DEG)
+    rotation = pose.rotation
+    face, a1, a2 = _resting(rotation, poly.normals, down)
+    if pose.alternative is not None:
+        # one marker alone has two planar solutions; a die at rest lies flat, which rules out most wrong ones
+        other = _resting(pose.alternative, poly.normals, down)
+        flat = [s for s in ((face, a1, a2), other) if s[1] <= FLAT_DEG[1]]
+        if len(flat) == 2 and flat[0][0] != flat[1][0]:
+            return face, 0.0
+        if flat:
+            face, a1, a2 = min(flat, key=lambda s: s[1])
+    half = (a2 - a1) / 2
+    safety = min(
+        _ramp(-half / max(pose.spread_deg, 1e-9), -SAFE_SIGMAS[0], -SAFE_SIGMAS[1]),
+        _ramp(-half, -SAFE_DEG[0], -SAFE_DEG[1]),
+    )
+    confidence = safety * _ramp(a1, *FLAT_DEG)
     confidence *= _ramp(pose.error / max(pose.scale, 1.0), *REPROJECTION)
-    if pose.alternative is not None and _resting(pose.alternative, poly.normals, down)[0] != face:
-        confidence = 0.0
     return face, confidence
 
 

@@ -25,12 +25,13 @@ __all__ = ["RenderedRest", "VideoFrame", "rendered_rests", "roll_video"]
 
 @dataclass(frozen=True)
 class RenderedRest:
-    """A frame of the die at rest on `face` (its value `value`), seen from `view`."""
+    """A frame of the die at rest on `face` (its value `value`), seen from `view`; `occluded`: a finger is over it."""
 
     image: np.ndarray
     face: int
     value: int
     view: View
+    occluded: bool = False
 
 
 @dataclass(frozen=True)
@@ -42,11 +43,13 @@ class VideoFrame:
     resting: bool
 
 
-def _spot(rng: np.random.Generator, view: View, spread: float = 0.22) -> np.ndarray:
-    """A point of the table near the middle of the view, mm."""
-    centre = view.position - view.position[2] / (view.rotation.T @ [0, 0, 1])[2] * (view.rotation.T @ [0, 0, 1])
-    width = 2 * view.position[2] * (view.width / 2) / view.camera.matrix[0, 0]
-    return centre[:2] + rng.uniform(-spread, spread, 2) * [width, width * view.height / view.width]
+def _spot(rng: np.random.Generator, view: View, spread: float = 0.2) -> np.ndarray:
+    """A point of the table within `spread` of the frame's height from the middle of the view, mm."""
+    axis = view.rotation.T @ [0.0, 0.0, 1.0]
+    centre = view.position - view.position[2] / axis[2] * axis
+    height = 2 * view.position[2] * (view.height / 2) / view.camera.matrix[1, 1]
+    angle, radius = rng.uniform(0, 2 * np.pi), spread * height * np.sqrt(rng.random())
+    return centre[:2] + radius * np.array([np.cos(angle), np.sin(angle)])
 
 
 def _image_circle(design: Design, view: View, rotation, position) -> tuple[np.ndarray, float]:
@@ -59,12 +62,12 @@ def _image_circle(design: Design, view: View, rotation, position) -> tuple[np.nd
     return centre, float(np.linalg.norm(uv - centre, axis=1).max())
 
 
-def _finger(rng: np.random.Generator, centre: np.ndarray, radius: float, reach=(0.45, 0.9)):
+def _finger(rng: np.random.Generator, centre: np.ndarray, radius: float, reach=(0.6, 1.0)):
     """A finger from outside reaching to within `reach` (fraction of the radius) of the die's centre."""
     angle = rng.uniform(0, 2 * np.pi)
     d = np.array([np.cos(angle), np.sin(angle)])
     tip = centre + d * radius * rng.uniform(*reach)
-    return (float(tip[0]), float(tip[1]), float(angle), float(radius * rng.uniform(0.5, 0.8)))
+    return (float(tip[0]), float(tip[1]), float(angle), float(radius * rng.uniform(0.35, 0.6)))
 
 
 def rendered_rests(
@@ -80,10 +83,11 @@ def rendered_rests(
         face = int(rng.choice(resting))
         rotation, position = rest_pose(design, face, rng.uniform(0, 2 * np.pi), _spot(rng, view))
         conditions = random_conditions(rng, view)
-        if rng.random() < finger:
+        occluded = bool(rng.random() < finger)
+        if occluded:
             conditions = replace(conditions, finger=_finger(rng, *_image_circle(design, view, rotation, position)))
         image = render(design, layout, view, rotation, position, conditions, textures=textures)
-        yield RenderedRest(image, face, design.values[poly.names[face]], view)
+        yield RenderedRest(image, face, design.values[poly.names[face]], view, occluded)
 
 
 def roll_video(
