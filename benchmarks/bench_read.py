@@ -4,9 +4,9 @@
 
 For each die: `--rests` rendered rests (a resting face drawn uniformly, any
 yaw, random camera tilt up to 6 degrees, lens 55-75 degrees while the reader
-assumes 65, light, blur, noise, JPEG, a finger over part of the die in 10 %
-of frames, from outside to 0.6-1 of its image radius from its centre) read one by one over the whole frame: read correctly, wrong
-values, unread.  Then a rendered video of `--drops` simulated drops (one
+assumes 65, light, blur, noise, JPEG, and in 10 % of frames a finger from
+outside reaching to 0.6-1 image radius of the die's centre) read one by one
+over the whole frame: read correctly, wrong values, unread.  Then a rendered video of `--drops` simulated drops (one
 fixed camera, a hand takes the die away before each drop, motion blur):
 drops counted exactly once, missed, counted twice, wrong.  Frames per second
 of the reader at 1280x720 on one core (OpenCV limited to one thread), beside
