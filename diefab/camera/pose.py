@@ -119,6 +119,7 @@ class FrameRead:
     confidence: float
     detected: int = 0
     box: tuple[int, int, int, int] | None = None  # x0, y0, x1, y1 of the markers seen, pixels
+    corners: dict | None = None  # marker id -> (4, 2) float image corners of the die's markers seen
 
 
 class MarkerDetector:
@@ -382,11 +383,12 @@ def read_frame(
     pose = solve_pose(ids, corners, detector.layout, camera, design.mm_per_unit) if len(ids) else None
     if pose is None:
         return FrameRead(None, None, None, 0.0, len(ids), box)
+    seen = {int(m): corners[i] for i, m in enumerate(ids) if int(m) in pose.markers}
     face, confidence = read_pose(pose, design, down)
     name = design.polyhedron.names[face]
     if confidence < min_confidence or name not in design.values:
-        return FrameRead(pose, None, None, confidence, len(ids), box)
-    return FrameRead(pose, face, design.values[name], confidence, len(ids), box)
+        return FrameRead(pose, None, None, confidence, len(ids), box, seen)
+    return FrameRead(pose, face, design.values[name], confidence, len(ids), box, seen)
 
 
 def layout_of(design: Design) -> MarkerLayout:

@@ -34,10 +34,10 @@ from .pose import FrameRead
 
 __all__ = ["Roll", "Settler", "same_rest"]
 
-#: Two rests are the same when the die moved less than this fraction of its size and turned less than this.
-SAME_PLACE, SAME_TURN_DEG = 0.25, 15.0
-#: The die moved between two frames when its origin moved more than this fraction of its size.
-STILL_PLACE = 0.06
+#: Two rests on the same face are the same when the markers seen in both moved less than this many marker sides.
+SAME_PLACE = 0.5
+#: The die moved between two frames when a marker seen in both moved more than this many marker sides.
+STILL_PLACE = 0.2
 
 
 @dataclass(frozen=True)
@@ -50,11 +50,29 @@ class Roll:
     confidence: float
 
 
-def same_rest(a, b, size_mm: float, place: float = SAME_PLACE, turn_deg: float = SAME_TURN_DEG) -> bool:
-    """Whether poses `a` and `b` (:class:`~.pose.Pose`) put the die in the same place and orientation."""
-    moved = float(np.linalg.norm(a.translation - b.translation))
-    cos = (np.trace(a.rotation @ b.rotation.T) - 1) / 2
-    return moved < place * size_mm and np.degrees(np.arccos(np.clip(cos, -1, 1))) < turn_deg
+def marker_shift(a, b) -> float | None:
+    """How far the markers seen in both frames moved (median of their centres), in marker sides (None: none in common).
+
+    Measured on the image, not on the poses: a lone marker's pose may flip between its two planar
+    solutions from frame to frame while the die lies still.
+    """
+    if not a.corners or not b.corners:
+        return None
+    common = set(a.corners) & set(b.corners)
+    if not common:
+        return None
+    shifts = []
+    for m in common:
+        p, q = np.asarray(a.corners[m]), np.asarray(b.corners[m])
+        side = float(np.linalg.norm(p - np.roll(p, 1, axis=0), axis=1).mean())
+        shifts.append(float(np.linalg.norm(p.mean(axis=0) - q.mean(axis=0))) / max(side, 1.0))
+    return float(np.median(shifts))
+
+
+def same_rest(a, b) -> bool:
+    """Whether reads `a` and `b` (:class:`~.pose.FrameRead`) show the die on the same face in the same place."""
+    shift = marker_shift(a, b)
+    return a.face == b.face and shift is not None and shift < SAME_PLACE
 
 
 class Settler:
@@ -78,11 +96,10 @@ class Settler:
         self._previous = None
 
     def moved(self, read: FrameRead) -> bool:
-        """Whether `read`'s pose moved from the previous frame's (both must have a pose)."""
-        prev, self._previous = self._previous, read.pose if read.pose is not None else self._previous
-        if read.pose is None or prev is None:
-            return False
-        return float(np.linalg.norm(read.pose.translation - prev.translation)) > STILL_PLACE * self.size_mm
+        """Whether the die's markers moved since the last frame that saw any of them."""
+        prev, self._previous = self._previous, read if read.corners else self._previous
+        shift = None if prev is None else marker_shift(read, prev)
+        return shift is not None and shift > STILL_PLACE
 
     @property
     def needs_reading(self) -> bool:
@@ -107,13 +124,9 @@ class Settler:
         faces = Counter(r.face for r in reads)
         if len(faces) == 1 and 2 * len(reads) >= len(window):
             last = reads[-1]
-            if (
-                self.last_rest is not None
-                and last.pose is not None
-                and same_rest(last.pose, self.last_rest, self.size_mm)
-            ):
+            if self.last_rest is not None and same_rest(last, self.last_rest):
                 return None
-            self.last_rest = last.pose
+            self.last_rest = last
             confidence = float(np.median([r.confidence for r in reads]))
             return Roll(frame, last.value, last.face, confidence)
         confidence = float(max((r.confidence for r in window), default=0.0))
