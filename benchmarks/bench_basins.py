@@ -20,10 +20,10 @@ import time
 
 import numpy as np
 
-from diefab import models
-from diefab.basins import RestBasins
-from diefab.design import load_design
-from diefab.optimize import Problem
+from diefab.dice.design import load_design
+from diefab.models.basins import RestBasins
+from diefab.models.probabilities import probabilities as models
+from diefab.search.optimize import Problem
 
 DICE = ("fudge-gem", "fudge-gem-paper", "d6", "d20")
 

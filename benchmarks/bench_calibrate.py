@@ -9,7 +9,7 @@ The dice: the paper's die as made (the gem a=1.18 b=0.52 c=0.72 d=1.41 as
 a paper model, i.e. a shell fill) with its 405 real rolls (Table 2), and
 every die of ``/work/shared/realrolls`` (or ``--realrolls FOLDER``): the
 printed prisms and the figurine d3s, read by
-:func:`diefab.calibrate.realrolls_die` (hull, stated centre of mass and
+:func:`diefab.search.calibrate.realrolls_die` (hull, stated centre of mass and
 inertia).
 
 Calibration, affordable on a shared 2-core machine:
@@ -22,14 +22,14 @@ Calibration, affordable on a shared 2-core machine:
    common random numbers (one seed; ``--drops`` drops per die and candidate,
    ``--slow-drops`` for dice of more than 50 hull faces, whose drops cost
    several times more).
-2. Per die, a response surface (:func:`diefab.calibrate.fit_surface`, a
+2. Per die, a response surface (:func:`diefab.search.calibrate.fit_surface`, a
    multinomial logistic regression quadratic in the settings) pools all
    candidates' counts into smooth value probabilities over the whole box.
 3. For each held-out die the calibrated setting minimizes the deviance of
    the *other* dice's real counts under their surfaces plus a normal prior
    toward the default physics (``--prior`` standard deviations, in units of
    each parameter's range; fixed before any result was seen)
-   (:func:`diefab.calibrate.fit_settings`).  Pooled, the fit uses every
+   (:func:`diefab.search.calibrate.fit_settings`).  Pooled, the fit uses every
    other die; *by material* only the other dice of the held-out die's
    material (:data:`MATERIAL`: what it is made of and what it was rolled
    on), and a die whose material no other die shares gets the defaults:
@@ -74,7 +74,11 @@ from pathlib import Path
 
 import numpy as np
 
-from diefab.calibrate import (
+from diefab.core.errors import DiefabError
+from diefab.dice.design import design_to_toml, parse_design
+from diefab.physics.realrolls import grouped_tvd as grouped
+from diefab.physics.simulate import shutdown_pool
+from diefab.search.calibrate import (
     RealDie,
     deviance,
     fit_settings,
@@ -85,10 +89,6 @@ from diefab.calibrate import (
     simulate_die,
     smoothed,
 )
-from diefab.design import design_to_toml, parse_design
-from diefab.errors import DiefabError
-from diefab.physics import shutdown_pool
-from diefab.realrolls import grouped_tvd as grouped
 
 HERE = Path(__file__).parent
 TABLE_2 = np.array([0, 20, 48, 80, 89, 83, 66, 17, 2])  # the paper's real rolls, values -4..4
@@ -142,7 +142,7 @@ def noise_tvd(die: RealDie, samples: int = 4000, seed: int = 0) -> float:
 
 
 def model_probabilities(die: RealDie, model: str) -> np.ndarray | None:
-    from diefab.models import MODELS, value_probabilities
+    from diefab.models.probabilities import MODELS, value_probabilities
 
     if model not in MODELS:
         return None
@@ -165,8 +165,8 @@ class Simulations:
     """Simulated value counts of the dice, cached by design, physics settings, drop count and seed."""
 
     def __init__(self, path: Path, workers: int) -> None:
-        from diefab.calibrate import settings_at
-        from diefab.physics import PhysicsSettings
+        from diefab.physics.simulate import PhysicsSettings
+        from diefab.search.calibrate import settings_at
 
         self.path, self.workers, self.table, self.dropped, self.seconds = path, workers, {}, 0, 0.0
         if path.is_file():
@@ -184,7 +184,7 @@ class Simulations:
         path.parent.mkdir(parents=True, exist_ok=True)
 
     def counts(self, die: RealDie, spec, x: np.ndarray, drops: int, seed: int) -> np.ndarray:
-        from diefab.calibrate import settings_at
+        from diefab.search.calibrate import settings_at
 
         values = [round(float(v), 9) for v in spec.values(x)]
         settings = settings_at(spec.base, spec.names, values)

@@ -23,12 +23,12 @@ import timeit
 
 import numpy as np
 
-from diefab.design import load_design
-from diefab.families import GEM, gem_center_of_mass_y, gem_polyhedron, gem_vertices
-from diefab.mass import mass_properties
-from diefab.optimize import Problem, optimize_design
-from diefab.stats import chi2_power, goodness_of_fit, pearson_divergence, rolls_for_power
-from diefab.targets import parse_target
+from diefab.dice.design import load_design
+from diefab.dice.families import GEM, gem_center_of_mass_y, gem_polyhedron, gem_vertices
+from diefab.dice.targets import parse_target
+from diefab.made.mass import mass_properties
+from diefab.search.optimize import Problem, optimize_design
+from diefab.stats.goodness import chi2_power, goodness_of_fit, pearson_divergence, rolls_for_power
 
 
 def eq1_check(n: int) -> float:

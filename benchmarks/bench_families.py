@@ -2,18 +2,18 @@
 
 Draws random dice of each family (structural parameters fixed per family,
 the others uniform in the family's box, rejection-sampled until every face
-holds the die by --min-margin; :func:`diefab.families.sampling.random_design`)
+holds the die by --min-margin; :func:`diefab.dice.families.sampling.random_design`)
 with a seed the fast model's correction was not trained on, drops each
 --drops times in pybullet (default settings, solid fill) and compares four
 models with the simulated face frequencies by TVD:
 
 * ``fast``: the model ``--model fast`` uses (the chain with its learned
-  correction; for the gem family the route :func:`diefab.fastmodel.fast_model`
+  correction; for the gem family the route :func:`diefab.models.fast.fast_model`
   takes);
-* ``general``: the general correction (:func:`diefab.correction.corrected`),
+* ``general``: the general correction (:func:`diefab.models.correction.corrected`),
   which is ``fast`` except on gems;
 * ``chain``: its physics chain alone, with the constants fitted to gems
-  (:func:`diefab.fastmodel.landing_probabilities`);
+  (:func:`diefab.models.fast.landing_probabilities`);
 * ``solid-angle``, the paper's model, the baseline;
 * ``basins``, the quasi-static basins of attraction.
 
@@ -55,7 +55,7 @@ RESULTS = Path(__file__).with_name("results") / "families.jsonl"
 
 def test_dice(name: str, k: int, seed: int, min_margin: float) -> list:
     """The `k` random test dice of family `name` for `seed` (die i from ``default_rng([seed, family, i])``)."""
-    from diefab.families.sampling import random_design
+    from diefab.dice.families.sampling import random_design
 
     index = list(FAMILIES).index(name)
     return [
@@ -71,13 +71,13 @@ def _key(record: dict, seed: int, physics: str) -> str:
 
 
 def _drop_range(design, seed: int, start: int, stop: int) -> tuple[np.ndarray, int]:
-    """Face counts and cocked drops of drops ``start .. stop - 1`` at `seed` (as :func:`diefab.physics.simulate`).
+    """Face counts and cocked drops of drops ``start .. stop - 1`` at `seed` (as :func:`diefab.physics.simulate.simulate`).
 
     Drop *i* of a run depends on the seed and *i* alone, so counts of
     consecutive ranges add up to those of one longer run.
     """
-    from diefab.physics import PhysicsSettings, _body
-    from diefab.world import COCKED, run_batch
+    from diefab.physics.simulate import PhysicsSettings, _body
+    from diefab.physics.world import COCKED, run_batch
 
     codes = run_batch(_body(design), PhysicsSettings.from_mapping(design.physics), seed, start, stop)
     counts = np.bincount(codes[codes >= 0], minlength=len(design.polyhedron.faces))
@@ -92,8 +92,8 @@ def simulated(dice: dict[str, list], drops: int, seed: int) -> dict[str, list[np
     round-robin over the families (die 0 of each, then die 1, ...), so an
     interrupted run leaves every family about equally far.
     """
-    from diefab.families.sampling import design_record
-    from diefab.world import OUTCOME_VERSION
+    from diefab.dice.families.sampling import design_record
+    from diefab.physics.world import OUTCOME_VERSION
 
     physics = f"outcomes-{OUTCOME_VERSION}"
     ranges: dict[str, dict[int, dict]] = {}
@@ -139,17 +139,17 @@ def noise_floor(p: np.ndarray, drops: int, rng: np.random.Generator, samples: in
 
 
 def models() -> dict:
-    from diefab.correction import corrected
-    from diefab.fastmodel import landing_probabilities
-    from diefab.models import MODELS
+    from diefab.models.correction import corrected
+    from diefab.models.fast import landing_probabilities
+    from diefab.models.probabilities import MODELS
 
     return {"fast": MODELS["fast"], "general": corrected, "chain": landing_probabilities,
             "solid-angle": MODELS["solid-angle"], "basins": MODELS["basins"]}  # fmt: skip
 
 
 def main(argv=None) -> int:
-    from diefab.files import atomic_write
-    from diefab.stats import tvd
+    from diefab.core.files import atomic_write
+    from diefab.stats.goodness import tvd
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--designs", type=int, default=6, help="random dice per family")

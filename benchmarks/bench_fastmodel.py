@@ -1,7 +1,7 @@
 """How well do the landing models track the physics?
 
 Draws random stable gems in the family's whole box (a, b, c, d and e free),
-drops each in pybullet (:func:`diefab.physics.simulate`, default settings)
+drops each in pybullet (:func:`diefab.physics.simulate.simulate`, default settings)
 and compares the ``fast`` model, its physics chain alone and the
 ``solid-angle`` model with the simulated frequencies by TVD.  Two disjoint
 sets of designs:
@@ -52,10 +52,10 @@ from pathlib import Path
 
 import numpy as np
 
-from diefab.design import load_design
-from diefab.files import atomic_write
-from diefab.geometry import face_margins
-from diefab.stats import jsd, pearson_divergence, tvd
+from diefab.core.files import atomic_write
+from diefab.dice.design import load_design
+from diefab.geometry.polyhedron import face_margins
+from diefab.stats.goodness import jsd, pearson_divergence, tvd
 
 RESULTS = Path(__file__).with_name("results") / "fastmodel.json"
 DISCREPANCY = Path(__file__).resolve().parents[1] / "diefab" / "data"
@@ -80,9 +80,9 @@ def iter_random_designs(seed: int, fill: str = "solid"):
     """
     from dataclasses import replace
 
-    from diefab.errors import DesignError
-    from diefab.families import GEM
-    from diefab.mass import Fill
+    from diefab.core.errors import DesignError
+    from diefab.dice.families import GEM
+    from diefab.made.mass import Fill
 
     base = replace(load_design("fudge-gem"), fill=Fill(kind=fill))
     bounds = GEM.bounds(["a", "b", "c", "d", "e"])
@@ -112,7 +112,7 @@ def random_designs(k: int, seed: int, fill: str = "solid"):
 
 def physics_version() -> str:
     """The validator's outcome version: counts simulated by other physics code are not reused."""
-    from diefab.world import OUTCOME_VERSION
+    from diefab.physics.world import OUTCOME_VERSION
 
     return f"outcomes-{OUTCOME_VERSION}"
 
@@ -156,7 +156,7 @@ def simulated(designs, drops: int, seed: int, which: str, cache: dict, workers: 
     (:func:`body_record`), so learning need not rebuild it and can tell when
     the body model has changed since.
     """
-    from diefab.physics import PhysicsSettings, simulate
+    from diefab.physics.simulate import PhysicsSettings, simulate
 
     settings = PhysicsSettings().as_dict()
     total = len(designs) if total is None else total
@@ -211,7 +211,7 @@ def frequencies(runs) -> np.ndarray:
 
 def chain_probabilities(designs) -> np.ndarray:
     """(n, m) the chain model (no discrepancy) at each design."""
-    from diefab.fastmodel import landing_probabilities
+    from diefab.models.fast import landing_probabilities
 
     return np.array([landing_probabilities(d.polyhedron, d.mass_properties().center) for d in designs])
 
@@ -231,7 +231,7 @@ class TrainingSet:
 
         With `distances`, also each design's distance to the nearest design of the other folds.
         """
-        from diefab.fastmodel import Discrepancy
+        from diefab.models.fast import Discrepancy
 
         n = len(self.designs) if n is None else n
         folds = np.random.default_rng(0).permutation(n) % FOLDS
@@ -246,7 +246,7 @@ class TrainingSet:
         return (err, near) if distances else err
 
     def learn(self, **kw):
-        from diefab.fastmodel import Discrepancy
+        from diefab.models.fast import Discrepancy
 
         return Discrepancy.learn(self.points, self.margins, self.p, self.q, **kw)
 
@@ -259,8 +259,8 @@ def learn(training: TrainingSet, drops: int, seed: int, design_seed: int = TRAIN
     held-out TVD is within 1 % of the least (more smoothing, same accuracy).
     A fill's correction is learned by ``learn_fill_correction.py``.
     """
-    from diefab import fastmodel
-    from diefab.physics import PhysicsSettings
+    from diefab.models import fast as fastmodel
+    from diefab.physics.simulate import PhysicsSettings
 
     scores = {}
     for smoothing in SMOOTHING:
@@ -294,7 +294,7 @@ def learn(training: TrainingSet, drops: int, seed: int, design_seed: int = TRAIN
 
 def ablation(training: TrainingSet, test, test_q) -> None:
     """Cross-validated TVD by coordinates and training-set size; the test set with the parameters alone."""
-    from diefab import fastmodel
+    from diefab.models import fast as fastmodel
 
     smoothing = fastmodel.gem_discrepancy().smoothing
     print(f"\nablation ({FOLDS}-fold CV on the training set at its drops, noise included; smoothing {smoothing:g})")
@@ -320,10 +320,10 @@ def ablation(training: TrainingSet, test, test_q) -> None:
 
 def optima(drops: int, seeds=(1, 2), workers: int | None = None) -> None:
     """The 4dF optimum of the fast model and of its chain alone, each validated by simulation."""
-    from diefab import fastmodel
-    from diefab.models import MODELS
-    from diefab.optimize import optimize_design
-    from diefab.physics import simulate
+    from diefab.models.probabilities import MODELS
+    from diefab.models import fast as fastmodel
+    from diefab.physics.simulate import simulate
+    from diefab.search.optimize import optimize_design
 
     MODELS.setdefault("chain", fastmodel.landing_probabilities)  # for this benchmark only
     base = load_design("fudge-gem")
@@ -380,8 +380,8 @@ def main(argv=None) -> None:
     if args.collect_only:
         return
 
-    from diefab import fastmodel
-    from diefab.models import MODELS
+    from diefab.models.probabilities import MODELS
+    from diefab.models import fast as fastmodel
 
     constants = {}
     if args.calibrate:
@@ -403,7 +403,7 @@ def main(argv=None) -> None:
         return MODELS["fast"](poly, center)
 
     def no_layer(poly, center, *, fill=None, inertia=None):
-        from diefab.families import gem_parameters
+        from diefab.dice.families import gem_parameters
 
         at = fastmodel.fill_discrepancy(args.fill).discrepancy_at
         return fastmodel.made_gem_base(poly, center, inertia, gem_parameters(poly), face_margins(poly, center), at)

@@ -31,11 +31,11 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from diefab import Design, load_design  # noqa: E402
-from diefab.fabricate.labels import design_axis  # noqa: E402
 from diefab.fabricate.net import design_net, footer_texts, render_net  # noqa: E402
-from diefab.fabricate.pages import pack_copies  # noqa: E402
 from diefab.fabricate.sheet import layout_sheets, plan_footer  # noqa: E402
 from diefab.fabricate.stl import build_solid, mesh_moments, threemf_bytes  # noqa: E402
+from diefab.made.labels import design_axis  # noqa: E402
+from diefab.made.pages import pack_copies  # noqa: E402
 
 SVG = "{http://www.w3.org/2000/svg}"
 INK = "{http://www.inkscape.org/namespaces/inkscape}"

@@ -32,8 +32,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 
 from test_transitional import _rounded_cube  # noqa: E402
 
-from diefab.design import design_to_toml  # noqa: E402
-from diefab.mass import Fill  # noqa: E402
+from diefab.dice.design import design_to_toml  # noqa: E402
+from diefab.made.mass import Fill  # noqa: E402
 
 
 def timed(*args: str) -> tuple[dict, float, float]:

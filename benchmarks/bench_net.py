@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from diefab import Polyhedron, load_design
-from diefab.fabricate.unfold import unfold
+from diefab.made.unfold import unfold
 
 
 def footprint(net) -> float:

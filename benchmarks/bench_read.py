@@ -37,7 +37,7 @@ def dice():
 def bench_rests(design, n: int, seed: int) -> dict:
     from diefab.camera.pose import Camera, MarkerDetector, read_frame
     from diefab.camera.rig import rendered_rests
-    from diefab.made.markers import marker_layout
+    from diefab.dice.markers import marker_layout
 
     layout = marker_layout(design)
     detector = MarkerDetector(layout)
@@ -66,7 +66,7 @@ def bench_video(design, drops: int, seed: int) -> dict:
     from diefab.camera.pose import Camera, MarkerDetector, read_frame
     from diefab.camera.reader import RollReader
     from diefab.camera.rig import roll_video
-    from diefab.made.markers import marker_layout
+    from diefab.dice.markers import marker_layout
 
     layout = marker_layout(design)
     _, truth, frames = roll_video(design, layout, drops, seed)

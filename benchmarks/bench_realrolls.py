@@ -1,7 +1,7 @@
 """diefab against real rolls: every die of the real-rolls data through the command line as shipped.
 
 For each die (one JSON file of the data folder) the reader
-(:mod:`diefab.realrolls`) writes its design TOML; then
+(:mod:`diefab.physics.realrolls`) writes its design TOML; then
 
     diefab predict DIE.toml --model solid-angle|basins|fast --json
     diefab validate DIE.toml --sims N --seed S --json
@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from diefab.realrolls import load_real_rolls
+from diefab.physics.realrolls import load_real_rolls
 
 DATA = Path("/work/shared/realrolls")
 MODELS = ("solid-angle", "basins", "fast")

@@ -18,10 +18,10 @@ import argparse
 
 import numpy as np
 
-from diefab.design import design_to_toml, load_design
-from diefab.physics import PhysicsSettings, simulate
-from diefab.simopt import RunSpec, best_design, optimize_by_simulation, start_point
-from diefab.stats import pearson_divergence, tvd
+from diefab.dice.design import design_to_toml, load_design
+from diefab.physics.simulate import PhysicsSettings, simulate
+from diefab.search.simopt import RunSpec, best_design, optimize_by_simulation, start_point
+from diefab.stats.goodness import pearson_divergence, tvd
 
 
 def main(argv=None) -> None:

@@ -9,7 +9,7 @@ layer as thick and wide as the others), and reads the G-code back: every
 extruding move deposits ``ΔE x filament cross-section`` of material spread
 evenly along its segment, centred half a layer below the nozzle.  The
 deposited volume and its centre of mass, turned back into the die's frame,
-are compared with :func:`diefab.mass.mass_properties` for the same fill, bed
+are compared with :func:`diefab.made.mass.mass_properties` for the same fill, bed
 face and labels (the fill model), and with the simpler models beside it: a
 uniform wall of the same thickness in every direction, and the solid die.
 Skips (exit 0) when ``prusa-slicer`` is not on the PATH.
@@ -30,10 +30,10 @@ from pathlib import Path
 
 import numpy as np
 
-from diefab.bodies import solid_label_masses
-from diefab.design import load_design
+from diefab.dice.design import load_design
 from diefab.fabricate.stl import build_solid, stl_bytes
-from diefab.mass import Fill, mass_properties
+from diefab.made.bodies import solid_label_masses
+from diefab.made.mass import Fill, mass_properties
 
 FILAMENT_MM = 1.75
 _WORD = re.compile(r"([GXYZEM])(-?\d*\.?\d+)")
@@ -107,7 +107,7 @@ def extrusions(gcode: str, layer_mm: float) -> tuple[np.ndarray, np.ndarray, np.
 
 def uniform_wall_center(design, fill: Fill) -> np.ndarray:
     """Centre of mass (mm) with a wall of the fill's side-wall thickness in every direction (no skins, no labels)."""
-    from diefab.mass import inset
+    from diefab.made.mass import inset
 
     poly, scale = design.polyhedron, design.mm_per_unit
     core = inset(poly, fill.wall_thickness_mm / scale)

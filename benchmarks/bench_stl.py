@@ -15,7 +15,7 @@ import argparse
 import statistics
 import time
 
-from diefab.design import load_design
+from diefab.dice.design import load_design
 from diefab.fabricate.engrave import cut_labels, cutter
 from diefab.fabricate.stl import _hull, build_solid
 

@@ -8,7 +8,7 @@ Prints, measured in this run on the ``fudge-gem`` template with default settings
 1. drops/s of the plain loop (one process, pybullet's own engine defaults,
    one ``stepSimulation`` call per 1/240 s step, velocities polled after
    every step, settled after 0.1 s still);
-2. drops/s of ``diefab.physics.simulate`` (what ``diefab validate`` runs) on
+2. drops/s of ``diefab.physics.simulate.simulate`` (what ``diefab validate`` runs) on
    all cores over the N drops of (4), its ratio to (1), and the resident
    memory of each worker;
 3. the early stop checked drop by drop: the fast path against itself with
@@ -31,10 +31,10 @@ from dataclasses import replace
 import numpy as np
 from scipy.stats import chi2_contingency
 
-from diefab.design import load_design
-from diefab.physics import PhysicsSettings, _body, shutdown_pool, simulate
-from diefab.stats import goodness_of_fit, tvd
-from diefab.world import run_batch
+from diefab.dice.design import load_design
+from diefab.physics.simulate import PhysicsSettings, _body, shutdown_pool, simulate
+from diefab.physics.world import run_batch
+from diefab.stats.goodness import goodness_of_fit, tvd
 
 TABLE_2 = np.array([0, 20, 48, 80, 89, 83, 66, 17, 2])  # the paper's real rolls, values -4..4
 
@@ -50,7 +50,7 @@ def plain_outcomes(design, settings, seed: int, n: int, workers: int) -> np.ndar
 
 
 def worker_rss_mb() -> list[float]:
-    from diefab import physics
+    from diefab.physics.simulate import simulate as physics
 
     out = []
     for proc in getattr(physics._POOL, "_processes", {}).values():
@@ -115,7 +115,7 @@ def main() -> None:
     cocked, unsettled = int((plain == -1).sum()), int((plain == -2).sum())
     print("  plain      " + " ".join(f"{c:6d}" for c in plain_faces) + f"  {cocked:6d} {unsettled:9d}")
     print(f"same physics (faces, independent seeds): TVD {d_face:.4f}, two-sample chi2 p = {p_face:.3f}")
-    from diefab.physics import RollResult
+    from diefab.physics.simulate import RollResult
 
     plain_result = RollResult(tuple(faces), plain_faces, cocked, unsettled, plain, 1.0, settings, 2)
     d_val, p_val = two_sample(fast.value_counts(design), plain_result.value_counts(design))

@@ -56,16 +56,16 @@ from pathlib import Path
 
 import numpy as np
 
-from diefab.design import design_to_toml, load_design
-from diefab.errors import PhysicsError
-from diefab.files import atomic_write
-from diefab.mass import Fill
-from diefab.models import FILL_MODELS, MODELS, face_probabilities, to_values
-from diefab.optimize import optimize_design
-from diefab.physics import simulate
-from diefab.profiles import load_profile, read_profile
-from diefab.readings import unreadable
-from diefab.stats import tvd
+from diefab.core.errors import PhysicsError
+from diefab.core.files import atomic_write
+from diefab.dice.design import design_to_toml, load_design
+from diefab.dice.readings import unreadable
+from diefab.made.mass import Fill
+from diefab.models.probabilities import FILL_MODELS, MODELS, face_probabilities, to_values
+from diefab.physics.profiles import load_profile, read_profile
+from diefab.physics.simulate import simulate
+from diefab.search.optimize import optimize_design
+from diefab.stats.goodness import tvd
 
 MIRRORS = ((0, 2), (1, 3), (5, 7), (6, 8))  # the gem's mirror-image faces
 
@@ -106,8 +106,8 @@ def refit_near(design, correction: np.ndarray, read_by, min_margin: float, max_s
     """
     from scipy.optimize import least_squares
 
-    from diefab.families import family
-    from diefab.optimize import Problem
+    from diefab.dice.families import family
+    from diefab.search.optimize import Problem
 
     names = family(design.family).free_names(design.params)
     problem = Problem(design, tuple(names), model, "tvd", min_margin, correction, tuple(read_by))
@@ -125,7 +125,7 @@ def refit_near(design, correction: np.ndarray, read_by, min_margin: float, max_s
 
 def _damped(design, problem, x0: np.ndarray, step: np.ndarray, max_step: float):
     """`design` moved by `step` (unit cube), cut to `max_step` and halved until it stands and reads as made."""
-    from diefab.optimize import INFEASIBLE
+    from diefab.search.optimize import INFEASIBLE
 
     step = step * min(1.0, max_step / max(float(np.linalg.norm(step)), 1e-12))
     for _ in range(8):
@@ -143,8 +143,8 @@ def refit_simulated(design, counts: np.ndarray, dropped, read_by, min_margin: fl
     in the unit cube (backwards at the upper bound); the Jacobian of the
     mirror-averaged value probabilities is the difference quotient.
     """
-    from diefab.families import family
-    from diefab.optimize import Problem
+    from diefab.dice.families import family
+    from diefab.search.optimize import Problem
 
     names = family(design.family).free_names(design.params)
     problem = Problem(design, tuple(names), "fast", "tvd", min_margin, None, tuple(read_by))

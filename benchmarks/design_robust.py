@@ -3,12 +3,12 @@
 Run:  nice -n 10 python benchmarks/design_robust.py [--rounds 3] [--drops 2000] [--out templates]
 
 Starts from ``fudge-gem-sim`` and repeats: drop the current die under each
-standard physics profile (:data:`diefab.profiles.STANDARD`; `--drops` each,
+standard physics profile (:data:`diefab.physics.profiles.STANDARD`; `--drops` each,
 a new physics seed every round), take each profile's simulated face
 frequencies minus the fast model's probabilities (averaged over
 mirror-image faces) as that profile's correction, and re-fit the
 parameters from the current die to minimize the *worst* of the corrected
-Eq. (2) objectives (:class:`diefab.optimize.Problem` with one correction
+Eq. (2) objectives (:class:`diefab.search.optimize.Problem` with one correction
 row per profile).  Each round prints the worst simulated TVD of the die it
 dropped; the die of the round with the least worst TVD is written as
 ``fudge-gem-robust.toml``.  Every round's counts are appended to `--log`,
@@ -33,14 +33,14 @@ from pathlib import Path
 import numpy as np
 from design_for_fill import symmetric
 
-from diefab.design import design_to_toml, load_design
-from diefab.fastmodel import fast_model
-from diefab.files import atomic_write
-from diefab.models import to_values
-from diefab.optimize import optimize_design
-from diefab.physics import shutdown_pool, simulate
-from diefab.profiles import STANDARD, load_profile
-from diefab.stats import tvd
+from diefab.core.files import atomic_write
+from diefab.dice.design import design_to_toml, load_design
+from diefab.models.fast import fast_model
+from diefab.models.probabilities import to_values
+from diefab.physics.profiles import STANDARD, load_profile
+from diefab.physics.simulate import shutdown_pool, simulate
+from diefab.search.optimize import optimize_design
+from diefab.stats.goodness import tvd
 
 HERE = Path(__file__).parent
 

@@ -2,7 +2,7 @@
 
 Two steps, each resumable:
 
-``--collect``  draws ``--designs`` random dice (:func:`diefab.families.sampling.random_design`,
+``--collect``  draws ``--designs`` random dice (:func:`diefab.dice.families.sampling.random_design`,
     ``--families`` (default all) in turn, die *i* from ``default_rng([seed, i])``), drops each
     ``--drops`` times in pybullet (physics seed ``seed * 1000 + i``, default
     settings, solid fill) and appends its face counts to
@@ -41,7 +41,7 @@ TRAIN_SEED = 1201
 
 def training_design(seed: int, i: int, families: list[str] | None = None):
     """Die `i` of the training set drawn with `seed` (`families`, default all, in turn)."""
-    from diefab.families.sampling import RANDOM_FAMILIES, random_design
+    from diefab.dice.families.sampling import RANDOM_FAMILIES, random_design
 
     names = list(families or RANDOM_FAMILIES)
     return random_design(names[i % len(names)], np.random.default_rng([seed, i]), label=f"train-{i}")
@@ -56,9 +56,9 @@ def read_runs(path: Path = TRAINING) -> list[dict]:
 def collect(
     designs: int, drops: int, seed: int, workers: int | None, families: list[str] | None = None, path: Path = TRAINING
 ) -> None:
-    from diefab.families.sampling import design_record
-    from diefab.physics import simulate
-    from diefab.world import OUTCOME_VERSION
+    from diefab.dice.families.sampling import design_record
+    from diefab.physics.simulate import simulate
+    from diefab.physics.world import OUTCOME_VERSION
 
     done = {(r["seed"], r["index"]) for r in read_runs(path) if r["drops"] >= drops}
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -90,9 +90,9 @@ class TrainingSet:
     """The simulated training dice with their features, chain probabilities and frequencies (resting faces)."""
 
     def __init__(self, runs: list[dict], constants: dict):
-        from diefab.correction import face_features
-        from diefab.families.sampling import record_design
-        from diefab.fastmodel import landing_probabilities
+        from diefab.dice.families.sampling import record_design
+        from diefab.models.correction import face_features
+        from diefab.models.fast import landing_probabilities
 
         self.runs, self.features, self.chains, self.q, self.families = runs, [], [], [], []
         self.constants = constants
@@ -112,7 +112,7 @@ class TrainingSet:
         return 0.5 * float(np.abs(p - self.q[i]).sum())
 
     def fit(self, which, **kw):
-        from diefab.correction import Correction
+        from diefab.models.correction import Correction
 
         return Correction.fit([self.features[i] for i in which], [self.chains[i] for i in which],
                               [self.q[i] for i in which], chain=self.constants, **kw)  # fmt: skip
@@ -132,16 +132,17 @@ class TrainingSet:
 def fit(path: Path = TRAINING, maxfev: int = 600, keep_chain: bool = False) -> None:
     """Refit the chain's constants, choose expansion and penalty by cross-validation, write the table.
 
-    The chain's five constants are refitted (:func:`diefab.fastmodel.calibrate`,
+    The chain's five constants are refitted (:func:`diefab.models.fast.calibrate`,
     least mean TVD, at most `maxfev` evaluations) to every training die, then
     the correction on top of that chain is cross-validated: the folds hold
     dice out of the correction's fit, not of the constants' (5 numbers fitted
     to all the dice).  With `keep_chain`, the packaged correction's constants
     are kept instead.
     """
-    from diefab import correction, fastmodel
-    from diefab.families.sampling import record_design
-    from diefab.files import atomic_write
+    from diefab.core.files import atomic_write
+    from diefab.dice.families.sampling import record_design
+    from diefab.models.probabilities import correction
+    from diefab.models import fast as fastmodel
 
     runs = read_runs(path)
     t = time.perf_counter()
@@ -202,7 +203,7 @@ def main(argv=None) -> int:
     if args.designs < 1 or args.drops < 1:
         ap.error("--designs and --drops must be positive")
     if args.collect:
-        from diefab.families.sampling import RANDOM_FAMILIES
+        from diefab.dice.families.sampling import RANDOM_FAMILIES
 
         families = [f.strip() for f in args.families.split(",") if f.strip()]
         unknown = [f for f in families if f not in RANDOM_FAMILIES]

@@ -13,7 +13,7 @@ already simulated in that fill at its current default settings under that
 set name (for example the shell gems of ``bench_fastmodel.py --fill shell
 --test-seed 404``).
 
-It then learns :class:`diefab.fastmodel.FillCorrection` from them: the
+It then learns :class:`diefab.models.fast.FillCorrection` from them: the
 simulated frequencies minus the fast model without the fill's layer, as a
 ridge-regularized linear function of the coordinates plus, where it helps, a
 Gaussian kernel ridge term, proportional to the body's inertia excess.  The
@@ -74,7 +74,7 @@ from bench_fastmodel import (  # noqa: E402
     simulated,
 )
 
-from diefab.stats import tvd  # noqa: E402
+from diefab.stats.goodness import tvd  # noqa: E402
 
 #: Ridge penalties the cross-validation chooses from (per training gem, on standardized coordinates).
 PENALTIES = (1e-3, 1e-2, 3e-2, 1e-1, 0.3, 1.0, 10.0)
@@ -101,8 +101,8 @@ class FillData:
     """Training gems of one fill: what the correction is learned from."""
 
     def __init__(self, kind: str, designs: list, runs: list[dict]):
-        from diefab.fastmodel import DISCREPANCY_AT, body_excess, made_gem_base
-        from diefab.geometry import face_margins
+        from diefab.geometry.polyhedron import face_margins
+        from diefab.models.fast import DISCREPANCY_AT, body_excess, made_gem_base
 
         self.kind, self.designs, self.runs = kind, designs, runs
         self.points = np.array([[d.params[n] for n in "abcde"] for d in designs])
@@ -121,7 +121,7 @@ class FillData:
         self.margins, self.excess = np.array(margins), np.array(excess)
 
     def learn(self, discrepancy_at: str = "body", **kw):
-        from diefab.fastmodel import FillCorrection
+        from diefab.models.fast import FillCorrection
 
         base = self.base[discrepancy_at]
         return FillCorrection.learn(self.kind, self.points, self.margins, base, self.excess, self.q,
@@ -129,7 +129,7 @@ class FillData:
 
     def cross_validate(self, discrepancy_at: str = "body", **kw) -> np.ndarray:
         """(n,) held-out TVD of every gem, 5-fold (fixed folds), each fold learned from the others with `kw`."""
-        from diefab.fastmodel import FillCorrection
+        from diefab.models.fast import FillCorrection
 
         n = len(self.designs)
         base = self.base[discrepancy_at]
@@ -161,9 +161,9 @@ def cached_set(name: str, kind: str, cache: dict) -> tuple[list, list[dict]]:
     """The gems of set `name` simulated in fill `kind` at its current default settings, with their bodies."""
     from bench_fastmodel import MADE, body_record
 
-    from diefab.design import load_design
-    from diefab.geometry import face_margins
-    from diefab.mass import Fill
+    from diefab.dice.design import load_design
+    from diefab.geometry.polyhedron import face_margins
+    from diefab.made.mass import Fill
 
     fill = Fill(kind=kind)
     label = json.dumps(fill.to_mapping(), sort_keys=True) if kind in MADE else kind
@@ -193,7 +193,7 @@ def choose(data: FillData) -> tuple[dict, dict]:
     mean held-out TVD wins, and within 1 % of it the simpler choice (simpler
     coordinates, larger penalties, no kernel term).
     """
-    from diefab.fastmodel import DISCREPANCY_AT, FILL_COORDINATES
+    from diefab.models.fast import DISCREPANCY_AT, FILL_COORDINATES
 
     def score(label: str, **kw) -> tuple[float, float]:
         err = data.cross_validate(**kw)
@@ -237,10 +237,10 @@ def label(choice: dict) -> str:
 
 
 def main(argv=None) -> None:
-    from diefab import fastmodel
-    from diefab.files import atomic_write
-    from diefab.mass import Fill
-    from diefab.physics import PhysicsSettings
+    from diefab.core.files import atomic_write
+    from diefab.made.mass import Fill
+    from diefab.models import fast as fastmodel
+    from diefab.physics.simulate import PhysicsSettings
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--fill", choices=fastmodel.FILL_LAYERS, required=True)

@@ -5,9 +5,7 @@ imports with NumPy alone; SciPy, trimesh, pybullet, manifold3d and matplotlib
 are imported by the functions that need them.
 """
 
-from .assignment import assign_values
-from .design import Design, design_to_toml, list_templates, load_design, parse_design
-from .errors import (
+from diefab.core.errors import (
     DesignError,
     DiefabError,
     FabricationError,
@@ -17,16 +15,18 @@ from .errors import (
     StatsError,
     TargetError,
 )
-from .families import GEM, Family, Parameter, families, family, gem_center_of_mass_y, gem_vertices
-from .geometry import Polyhedron, face_margins, solid_angles, up_faces
-from .mass import Fill, MassProperties, mass_properties
-from .models import MODELS, face_probabilities, value_probabilities
-from .physics import PhysicsSettings, RollResult, simulate
-from .profiles import load_profile
-from .readings import markings, readings
-from .stats import GoodnessOfFit, goodness_of_fit, jsd, pearson_divergence, tvd
-from .synthesis import synthesize
-from .targets import Target, parse_target
+from diefab.dice.assignment import assign_values
+from diefab.dice.design import Design, design_to_toml, list_templates, load_design, parse_design
+from diefab.dice.families import GEM, Family, Parameter, families, family, gem_center_of_mass_y, gem_vertices
+from diefab.dice.readings import markings, readings
+from diefab.dice.targets import Target, parse_target
+from diefab.geometry.polyhedron import Polyhedron, face_margins, solid_angles, up_faces
+from diefab.made.mass import Fill, MassProperties, mass_properties
+from diefab.models.probabilities import MODELS, face_probabilities, value_probabilities
+from diefab.physics.profiles import load_profile
+from diefab.physics.simulate import PhysicsSettings, RollResult, simulate
+from diefab.search.synthesis import synthesize
+from diefab.stats.goodness import GoodnessOfFit, goodness_of_fit, jsd, pearson_divergence, tvd
 
 __version__ = "0.1.0"
 

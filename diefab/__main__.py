@@ -1,5 +1,5 @@
 """python -m diefab: the command line."""
 
-from .cli import main
+from diefab.cli import main
 
 main()

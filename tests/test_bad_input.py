@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 import tomli_w
 
-from diefab.design import template_path
+from diefab.dice.design import template_path
 
 GEM = tomllib.loads(Path(str(template_path("fudge-gem"))).read_text())
 CUBE = tomllib.loads(Path(str(template_path("d6"))).read_text())
@@ -149,10 +149,10 @@ def test_physics_table_is_checked_by_every_command(tmp_path, bad, command):
 
 
 def _api_cases():
-    from diefab.design import Design
-    from diefab.physics import PhysicsSettings
-    from diefab.stats import goodness_of_fit, parse_counts
-    from diefab.targets import parse_target
+    from diefab.dice.design import Design
+    from diefab.dice.targets import parse_target
+    from diefab.physics.simulate import PhysicsSettings
+    from diefab.stats.goodness import goodness_of_fit, parse_counts
 
     counts = [0, 20, 48, 80, 89, 83, 66, 17, 2]
     p = np.array([1, 4, 10, 16, 19, 16, 10, 4, 1]) / 81
@@ -177,7 +177,7 @@ def _api_cases():
 
 @pytest.mark.parametrize("case", sorted(_api_cases()))
 def test_api_raises_typed_errors(case):
-    from diefab.errors import DiefabError
+    from diefab.core.errors import DiefabError
 
     with pytest.raises(DiefabError):
         _api_cases()[case]()
@@ -299,9 +299,9 @@ def test_huge_target_weights_are_a_distribution(run):
 
 
 def test_a_parameter_on_its_bound_is_in_the_family():
-    from diefab.design import load_design
-    from diefab.families import family
-    from diefab.optimize import Problem
+    from diefab.dice.design import load_design
+    from diefab.dice.families import family
+    from diefab.search.optimize import Problem
 
     design = load_design("fudge-gem")
     problem = Problem(design, ("a", "b", "c", "d", "e"), "solid-angle", "eq2", 0.0)
@@ -331,8 +331,8 @@ def test_a_failing_output_leaves_the_others_as_they_were(tmp_path, bad, args, bl
 
 
 def test_write_files_restores_replaced_files_when_a_rename_fails(tmp_path, monkeypatch):
-    from diefab import files
-    from diefab.errors import OutputError
+    from diefab.core import files
+    from diefab.core.errors import OutputError
 
     (tmp_path / "a.txt").write_text("old a")
     real = os.replace
@@ -571,8 +571,8 @@ FUZZ_FIELDS = [*sorted({"name", "description", "family", "target", "size_mm", "p
 def test_any_value_in_any_field_is_a_design_or_a_diefab_error(field, tmp_path):
     from hypothesis import HealthCheck, given, settings
 
-    from diefab.design import parse_design
-    from diefab.errors import DiefabError
+    from diefab.core.errors import DiefabError
+    from diefab.dice.design import parse_design
 
     base = "cube" if field.split(".")[0] in ("vertices", "faces") else "gem"
 
@@ -657,8 +657,8 @@ def test_bad_realrolls_files(tmp_path, bad, key, value, words):
                          (b'{"shape": "\xff"}', "utf-8"), (None, "not a regular file")],
                          ids=["not-json", "not-utf8", "device"])  # fmt: skip
 def test_realrolls_files_that_are_not_json(tmp_path, bad, content, words):
-    from diefab.calibrate import realrolls_die
-    from diefab.errors import DiefabError
+    from diefab.core.errors import DiefabError
+    from diefab.search.calibrate import realrolls_die
 
     path = Path("/dev/zero") if content is None else tmp_path / "die.json"
     if content is None and not path.exists():
@@ -863,7 +863,7 @@ def test_messages_name_the_culprit(tmp_path, bad, monkeypatch, args, words):
 
 @pytest.mark.skipif(not hasattr(signal, "setitimer"), reason="needs interval timers")
 def test_an_interrupt_during_a_write_leaves_no_temporary_file(tmp_path, monkeypatch):
-    from diefab import files
+    from diefab.core import files
 
     def interrupt(signum, frame):
         raise KeyboardInterrupt
@@ -906,7 +906,7 @@ class _FillingFile:
 
 
 def test_a_full_disk_mid_run_keeps_the_log_and_says_how_to_resume(tmp_path, bad, run, monkeypatch):
-    from diefab import simopt
+    from diefab.search import simopt
 
     real = simopt.RunLog.append
 
@@ -954,8 +954,8 @@ REALROLLS_FIELDS = ["shape", "description", "physical", "physical.outcomes", "ph
 def test_any_value_in_any_realrolls_field_is_a_die_or_a_diefab_error(field, tmp_path):
     from hypothesis import HealthCheck, given, settings
 
-    from diefab.calibrate import realrolls_die
-    from diefab.errors import DiefabError
+    from diefab.core.errors import DiefabError
+    from diefab.search.calibrate import realrolls_die
 
     @settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
     @given(value=_toml_values())

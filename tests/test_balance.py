@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from diefab.balance import TVD_SLACK, made_balance
-from diefab.design import load_design
+from diefab.dice.design import load_design
+from diefab.models.balance import TVD_SLACK, made_balance
 
 
 def test_a_symmetric_die_stays_balanced_and_a_shifted_centre_warns():

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from diefab.basins import RestBasins
-from diefab.design import load_design
-from diefab.families import gem_polyhedron
-from diefab.geometry import Polyhedron, resting_faces
+from diefab.dice.design import load_design
+from diefab.dice.families import gem_polyhedron
+from diefab.geometry.polyhedron import Polyhedron, resting_faces
+from diefab.models.basins import RestBasins
 
 CUBE = Polyhedron.from_points([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
 

@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from diefab.design import Design, design_to_toml, load_design, parse_design
-from diefab.errors import DesignError
-from diefab.geometry import Polyhedron
-from diefab.models import MODELS, face_probabilities
+from diefab.core.errors import DesignError
+from diefab.dice.design import Design, design_to_toml, load_design, parse_design
+from diefab.geometry.polyhedron import Polyhedron
+from diefab.models.probabilities import MODELS, face_probabilities
 
 REALROLLS = Path("/work/shared/realrolls")
 
@@ -31,7 +31,7 @@ def _l_shape(tmp_path, extra: str = "") -> Path:
 
 def _with_resting_values(path: Path) -> Design:
     """Load a design whose values are filled in for the faces it can rest on."""
-    from diefab.geometry import resting_faces
+    from diefab.geometry.polyhedron import resting_faces
 
     text = path.read_text()
     mesh_design = _probe(path)
@@ -42,7 +42,7 @@ def _with_resting_values(path: Path) -> Design:
 
 
 def _probe(path: Path) -> Design:
-    from diefab.meshes import ClosedMesh
+    from diefab.geometry.meshes import ClosedMesh
 
     mesh = ClosedMesh.load(path.with_suffix(".stl"))
     n = len(Polyhedron.from_points(mesh.vertices, strict=False, merge_tolerance=0.01 / 10).faces)
@@ -68,7 +68,7 @@ def test_a_non_convex_mesh_rests_on_its_hull_with_the_mass_of_its_body(tmp_path)
 
 
 def test_print_fill_of_a_non_convex_mesh_lies_between_shell_and_solid(tmp_path):
-    from diefab.mass import Fill
+    from diefab.made.mass import Fill
 
     d = _with_resting_values(_l_shape(tmp_path))
     solid = d.mass_properties(Fill("solid"))
@@ -93,7 +93,7 @@ def test_a_stated_center_of_mass_and_inertia_replace_the_fills(tmp_path):
     assert np.allclose(props.inertia, props.mass * np.array(inertia))
     again = parse_design(design_to_toml(both))
     assert again.center_of_mass == (0.0, 0.0, -0.3) and again.inertia == inertia
-    from diefab.physics import _body
+    from diefab.physics.simulate import _body
 
     body = _body(both)
     assert np.allclose(body.center, [0, 0, -0.3]) and np.allclose(np.sort(body.inertia), [4, 4.8, 5.6])
@@ -140,7 +140,7 @@ def test_near_coplanar_hull_triangles_merge_within_the_tolerance():
 
 @pytest.mark.skipif(not REALROLLS.is_dir(), reason="real-rolls data not present")
 def test_real_figurine_die_loads_with_its_stated_body():
-    from diefab.realrolls import load_real_rolls
+    from diefab.physics.realrolls import load_real_rolls
 
     rolls = load_real_rolls(REALROLLS / "dragon_d3.json")
     text = rolls.design_files()["dragon_d3.toml"]
@@ -162,7 +162,7 @@ def _value_matrix(d: Design) -> np.ndarray:
 
 
 def test_grouped_tvd_relabels_only_within_a_group():
-    from diefab.realrolls import RealRolls, grouped_tvd
+    from diefab.physics.realrolls import RealRolls, grouped_tvd
 
     q = np.array([0.1, 0.4, 0.3, 0.2])
     swapped = q[[3, 2, 1, 0]]

@@ -7,9 +7,9 @@ import json
 import numpy as np
 import pytest
 
-from diefab.errors import PhysicsError
-from diefab.physics import PhysicsSettings
-from diefab.profiles import load_profile, profile_to_toml
+from diefab.core.errors import PhysicsError
+from diefab.physics.profiles import load_profile, profile_to_toml
+from diefab.physics.simulate import PhysicsSettings
 
 # ----------------------------------------------------------------------
 # physics profiles
@@ -78,14 +78,14 @@ def test_cli_validate_uses_profile_then_options(tmp_path, run):
 
 @pytest.fixture(scope="module")
 def cube_die():
-    from diefab.calibrate import real_die
-    from diefab.design import load_design
+    from diefab.dice.design import load_design
+    from diefab.search.calibrate import real_die
 
     return real_die("cube", load_design("d6"), "10,11,9,10,12,8")
 
 
 def test_deviance_is_zero_at_the_frequencies_and_positive_elsewhere():
-    from diefab.calibrate import deviance
+    from diefab.search.calibrate import deviance
 
     c = np.array([3, 7, 10])
     assert deviance(c, c / c.sum()) == pytest.approx(0.0, abs=1e-12)
@@ -93,22 +93,22 @@ def test_deviance_is_zero_at_the_frequencies_and_positive_elsewhere():
 
 
 def test_smoothing_keeps_unsimulated_values_possible():
-    from diefab.calibrate import smoothed
+    from diefab.search.calibrate import smoothed
 
     p = smoothed([0, 10, 30])
     assert p.sum() == pytest.approx(1.0) and p[0] > 0 and p[0] == pytest.approx(0.5 / 41.5)
 
 
 def test_groups_average_within_a_mirror_pair():
-    from diefab.calibrate import RealDie
-    from diefab.design import load_design
+    from diefab.dice.design import load_design
+    from diefab.search.calibrate import RealDie
 
     die = RealDie("cube", load_design("d6"), np.array([1, 2, 3, 4, 5, 6]), groups=((0, 5),))
     assert die.symmetrized(np.array([0.1, 0.2, 0.2, 0.2, 0.1, 0.2]))[[0, 5]] == pytest.approx([0.15, 0.15])
 
 
 def test_settings_at_sets_the_top_of_a_range():
-    from diefab.calibrate import parameter_value, settings_at
+    from diefab.search.calibrate import parameter_value, settings_at
 
     s = settings_at(PhysicsSettings(angular_velocity=(2.0, 10.0)), ["spin", "restitution"], [25.0, 0.6])
     assert s.angular_velocity == (2.0, 25.0) and s.restitution == 0.6
@@ -117,8 +117,8 @@ def test_settings_at_sets_the_top_of_a_range():
 
 
 def test_spec_starts_at_the_base_settings_and_keeps_dice_above_ground(cube_die):
-    from diefab.calibrate import CalibrationSpec, make_spec
-    from diefab.physics import _body
+    from diefab.physics.simulate import _body
+    from diefab.search.calibrate import CalibrationSpec, make_spec
 
     spec = make_spec([cube_die], free=["restitution", "drop_height"], bounds={"drop_height": (0.1, 8.0)})
     assert spec.values(spec.x0) == pytest.approx([0.3, 5.0])
@@ -141,15 +141,15 @@ def test_spec_starts_at_the_base_settings_and_keeps_dice_above_ground(cube_die):
     ],
 )
 def test_bad_spec(cube_die, kwargs, words):
-    from diefab.calibrate import CalibrationError, make_spec
+    from diefab.search.calibrate import CalibrationError, make_spec
 
     with pytest.raises(CalibrationError, match=words):
         make_spec([cube_die], **kwargs)
 
 
 def test_bad_counts():
-    from diefab.calibrate import CalibrationError, real_die
-    from diefab.design import load_design
+    from diefab.dice.design import load_design
+    from diefab.search.calibrate import CalibrationError, real_die
 
     for counts, words in (("1,2,3", "6 values"), ("1,2,3,4,5,-6", "negative"), ("0,0,0,0,0,0", "no real rolls")):
         with pytest.raises(CalibrationError, match=words):
@@ -170,7 +170,7 @@ def _quadratic(spec, centre, hessian):
 
 
 def test_curvature_recovers_the_standard_errors_of_a_quadratic(cube_die):
-    from diefab.calibrate import curvature, make_spec
+    from diefab.search.calibrate import curvature, make_spec
 
     spec = make_spec([cube_die], free=["restitution", "spin"])
     h = np.array([[400.0, 100.0], [100.0, 200.0]])
@@ -184,7 +184,7 @@ def test_curvature_recovers_the_standard_errors_of_a_quadratic(cube_die):
 
 
 def test_curvature_leaves_a_flat_direction_undetermined(cube_die):
-    from diefab.calibrate import curvature, make_spec
+    from diefab.search.calibrate import curvature, make_spec
 
     spec = make_spec([cube_die], free=["restitution", "spin"])
     objective = _quadratic(spec, np.array([0.4, 0.6]), np.array([[400.0, 0.0], [0.0, 0.0]]))
@@ -195,7 +195,7 @@ def test_curvature_leaves_a_flat_direction_undetermined(cube_die):
 
 
 def test_driver_finds_the_minimum_and_a_resumed_run_continues_it(cube_die):
-    from diefab.calibrate import calibrate, make_spec
+    from diefab.search.calibrate import calibrate, make_spec
 
     spec = make_spec([cube_die], free=["restitution", "spin"], sims_per_eval=100, max_sims=100)
     objective = _quadratic(spec, np.array([0.7, 0.2]), np.diag([50.0, 50.0]))
@@ -210,7 +210,7 @@ def test_driver_finds_the_minimum_and_a_resumed_run_continues_it(cube_die):
 
 
 def test_grid_halves_toward_the_minimum_on_ever_more_drops(cube_die):
-    from diefab.calibrate import calibrate, grid_interval, make_spec
+    from diefab.search.calibrate import calibrate, grid_interval, make_spec
 
     spec = make_spec([cube_die], free=["restitution"], method="grid", grid_points=11, sims_per_eval=100,
                      max_sims=800)  # fmt: skip
@@ -275,7 +275,7 @@ def test_cli_calibrates_writes_a_profile_and_resumes(tmp_path, run):
 
 
 def test_standard_profiles_are_shipped_and_valid():
-    from diefab.profiles import STANDARD, list_profiles
+    from diefab.physics.profiles import STANDARD, list_profiles
 
     assert set(STANDARD) <= set(list_profiles())
     for name in STANDARD:
@@ -295,8 +295,8 @@ def test_sensitivity_drops_each_profile_with_its_settings(run):
 
 
 def test_robust_objective_is_the_worst_throw_and_resumes(tmp_path):
-    from diefab.design import design_to_toml, load_design
-    from diefab.simopt import RunSpec, SimulationObjective, start_point
+    from diefab.dice.design import design_to_toml, load_design
+    from diefab.search.simopt import RunSpec, SimulationObjective, start_point
 
     d = load_design("fudge-gem")
     names = ("a", "b", "c", "d")
@@ -333,10 +333,10 @@ REALROLLS = "/work/shared/realrolls/binom3.json"
 def test_realrolls_die_keeps_counts_groups_and_references():
     from pathlib import Path
 
-    pytest.importorskip("diefab.realrolls")
+    pytest.importorskip("diefab.physics.realrolls")
     if not Path(REALROLLS).is_file():
         pytest.skip("the real-rolls data are not on this machine")
-    from diefab.calibrate import realrolls_die
+    from diefab.search.calibrate import realrolls_die
 
     data = json.loads(Path(REALROLLS).read_text())
     die = realrolls_die(REALROLLS)
@@ -350,7 +350,7 @@ def test_realrolls_die_keeps_counts_groups_and_references():
 
 def _true_surface(d: int = 2):
     """A known 3-value surface, quadratic in the logits, and its probabilities."""
-    from diefab.calibrate import ResponseSurface, quadratic_features
+    from diefab.search.calibrate import ResponseSurface, quadratic_features
 
     rng = np.random.default_rng(3)
     coef = np.zeros((quadratic_features(np.zeros((1, d))).shape[1], 3))
@@ -359,7 +359,7 @@ def _true_surface(d: int = 2):
 
 
 def test_surface_recovers_a_quadratic_logit_from_multinomial_counts():
-    from diefab.calibrate import fit_surface
+    from diefab.search.calibrate import fit_surface
 
     truth = _true_surface()
     rng = np.random.default_rng(0)
@@ -375,7 +375,7 @@ def test_surface_recovers_a_quadratic_logit_from_multinomial_counts():
 
 
 def test_surface_keeps_a_value_never_simulated_possible():
-    from diefab.calibrate import fit_surface
+    from diefab.search.calibrate import fit_surface
 
     xs = np.linspace(0, 1, 6)[:, None]
     counts = np.c_[np.full(6, 50), np.full(6, 50), np.zeros(6)]
@@ -385,8 +385,8 @@ def test_surface_keeps_a_value_never_simulated_possible():
 
 
 def test_fit_settings_finds_the_setting_that_made_the_rolls_and_the_prior_pulls_toward_the_start():
-    from diefab.calibrate import RealDie, ResponseSurface, fit_settings, quadratic_features
-    from diefab.design import load_design
+    from diefab.dice.design import load_design
+    from diefab.search.calibrate import RealDie, ResponseSurface, fit_settings, quadratic_features
 
     cube = load_design("d6")  # six values
     rng = np.random.default_rng(5)

@@ -15,7 +15,7 @@ from diefab.camera.pose import Camera, FrameRead, MarkerDetector, read_frame, re
 from diefab.camera.render import View, render, rest_pose  # noqa: E402
 from diefab.camera.rig import rendered_rests, roll_video  # noqa: E402
 from diefab.camera.settle import Settler  # noqa: E402
-from diefab.made.markers import marker_layout  # noqa: E402
+from diefab.dice.markers import marker_layout  # noqa: E402
 
 
 @pytest.mark.parametrize("name", ["d6", "d20", "fudge-gem"])

@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 from scipy.stats import chisquare
 
-from diefab.calibrate import PARAMETERS, make_spec, real_die
-from diefab.design import load_design
-from diefab.errors import PhysicsError
-from diefab.models import basins_model
-from diefab.physics import PhysicsSettings
-from diefab.profiles import load_profile, profile_to_toml
-from diefab.world import World, die_body, initial_conditions, run_batch
+from diefab.core.errors import PhysicsError
+from diefab.dice.design import load_design
+from diefab.models.probabilities import basins_model
+from diefab.physics.profiles import load_profile, profile_to_toml
+from diefab.physics.simulate import PhysicsSettings
+from diefab.physics.world import World, die_body, initial_conditions, run_batch
+from diefab.search.calibrate import PARAMETERS, make_spec, real_die
 
 pytest.importorskip("pybullet")
 

@@ -7,7 +7,7 @@ import os
 
 import pytest
 
-from diefab.design import load_design
+from diefab.dice.design import load_design
 
 TABLE2 = "0,20,48,80,89,83,66,17,2"
 
@@ -151,11 +151,11 @@ def test_unwritable_output_folder_even_for_root(bad):
 
 
 def test_fast_model_on_a_fill_without_its_correction_says_it_extrapolates(run, monkeypatch):
-    import diefab.fastmodel
+    import diefab.models.fast
 
     code, _, err = run("predict", "fudge-gem", "--model", "fast", "--fill", "print")
     assert code == 0 and "learned on solid gems" not in err  # every made fill has its own correction
-    monkeypatch.setattr(diefab.fastmodel, "fill_discrepancy", lambda kind: None)
+    monkeypatch.setattr(diefab.models.fast, "fill_discrepancy", lambda kind: None)
     code, out, err = run("predict", "fudge-gem", "--model", "fast", "--fill", "print", "--json")
     assert code == 0
     assert json.loads(out)["fill"] == "print"

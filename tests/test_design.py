@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from diefab.design import Design, design_to_toml, list_templates, load_design, parse_design
-from diefab.errors import DesignError
-from diefab.models import face_probabilities, value_probabilities
+from diefab.core.errors import DesignError
+from diefab.dice.design import Design, design_to_toml, list_templates, load_design, parse_design
+from diefab.models.probabilities import face_probabilities, value_probabilities
 
 
 def test_templates_ship_and_load():
@@ -65,7 +65,7 @@ def test_toml_round_trip(tmp_path):
 
 def test_shell_and_solid_fill_agree_roughly_as_the_paper_says():
     d = load_design("fudge-gem")
-    from diefab.mass import Fill
+    from diefab.made.mass import Fill
 
     solid = value_probabilities(d)
     shell = value_probabilities(d, fill=Fill("shell"))

@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from diefab.design import load_design
-from diefab.fastmodel import fast_model
-from diefab.models import to_values
-from diefab.stats import tvd
+from diefab.dice.design import load_design
+from diefab.models.fast import fast_model
+from diefab.models.probabilities import to_values
+from diefab.stats.goodness import tvd
 
 SCRIPT = Path(__file__).resolve().parent.parent / "benchmarks" / "design_for_fill.py"
 
@@ -67,7 +67,7 @@ def test_step_along_the_simulated_slope_lowers_the_tvd(script):
 
 def test_pool_compares_with_the_chosen_model(script):
     """With --model basins the pooled model probabilities are the basins model's, weighted by drops."""
-    from diefab.models import face_probabilities
+    from diefab.models.probabilities import face_probabilities
 
     die = load_design("fudge-gem-sim")
     other = die.with_params(c=die.params["c"] + 0.03)
@@ -81,7 +81,7 @@ def test_pool_compares_with_the_chosen_model(script):
 
 def test_near_refit_with_the_basins_model_lowers_its_tvd(script):
     """With no correction, the damped step must bring the basins model's value probabilities nearer 4dF."""
-    from diefab.models import face_probabilities
+    from diefab.models.probabilities import face_probabilities
 
     die = load_design("fudge-gem-sim")
     goal = die.target_distribution.aligned(die.support)
@@ -95,7 +95,7 @@ def test_near_refit_with_the_basins_model_lowers_its_tvd(script):
 
 def test_printed_table_gem_keeps_the_profile_and_stands(script):
     """The shipped printed-table gem carries printed-table's physics, so a plain validate drops it so."""
-    from diefab.profiles import read_profile
+    from diefab.physics.profiles import read_profile
 
     die = load_design("fudge-gem-print-table")
     assert dict(die.physics) == read_profile("printed-table")[0]["physics"]

@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from diefab.design import Design
-from diefab.errors import DesignError
-from diefab.families import GEM, NGEM, families, family
-from diefab.geometry import solid_angles
+from diefab.core.errors import DesignError
+from diefab.dice.design import Design
+from diefab.dice.families import GEM, NGEM, families, family
+from diefab.geometry.polyhedron import solid_angles
 
 
 def _probs(poly):

@@ -7,11 +7,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from diefab import fastmodel
-from diefab.design import load_design
-from diefab.errors import DesignError
-from diefab.families import GEM, gem_parameters, gem_polyhedron
-from diefab.fastmodel import (
+from diefab.core.errors import DesignError
+from diefab.dice.design import load_design
+from diefab.dice.families import GEM, gem_parameters, gem_polyhedron
+from diefab.geometry.polyhedron import Polyhedron, face_margins
+from diefab.made.mass import Fill, mass_properties
+from diefab.models.fast import (
     Discrepancy,
     fast_model,
     gem_discrepancy,
@@ -19,9 +20,8 @@ from diefab.fastmodel import (
     roll_retention,
     tipping_barriers,
 )
-from diefab.geometry import Polyhedron, face_margins
-from diefab.mass import Fill, mass_properties
-from diefab.models import MODELS, value_probabilities
+from diefab.models.probabilities import MODELS, value_probabilities
+from diefab.models import fast as fastmodel
 
 BOUNDS = GEM.bounds(["a", "b", "c", "d", "e"])
 
@@ -115,7 +115,7 @@ def test_registered_for_predict_and_optimize():
 
 
 def test_optimize_with_the_fast_model():
-    from diefab.optimize import optimize_design
+    from diefab.search.optimize import optimize_design
 
     result = optimize_design(load_design("fudge-gem"), model="fast", starts=1, seed=0, max_evaluations=300)
     assert result.margins.min() >= 0.05
@@ -274,7 +274,7 @@ def test_packaged_discrepancy_matches_the_chain_and_the_family():
     for name in ("temperature", "tau", "area_power", "roll_power", "height_weight"):
         assert chain[name] == getattr(fastmodel, name.upper())
     # and against the chain as the code computes it now, on the physics version the validator runs
-    from diefab.world import OUTCOME_VERSION
+    from diefab.physics.world import OUTCOME_VERSION
 
     assert fit.info["physics"] == f"outcomes-{OUTCOME_VERSION}"
     base = load_design("fudge-gem")
@@ -293,7 +293,7 @@ def test_packaged_discrepancy_matches_the_chain_and_the_family():
 
 
 def test_fast_model_is_the_general_correction_for_non_gems_and_the_discrepancy_for_gems():
-    from diefab.correction import corrected
+    from diefab.models.correction import corrected
 
     d6 = load_design("d6")
     c = d6.mass_properties().center
@@ -307,8 +307,8 @@ def test_fast_model_is_the_general_correction_for_non_gems_and_the_discrepancy_f
 def test_fast_model_tracks_pybullet_on_fresh_random_gems():
     # Gems no model was fitted on (another design seed than the benchmark's sets), 4000 drops each:
     # the fast model is within the sampling noise plus its own error, far closer than solid angles.
-    from diefab.physics import simulate
-    from diefab.stats import tvd
+    from diefab.physics.simulate import simulate
+    from diefab.stats.goodness import tvd
 
     base = load_design("fudge-gem")
     rng = np.random.default_rng(2026)

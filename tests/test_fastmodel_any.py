@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from diefab.correction import FEATURES, Correction, corner_shares, corrected, face_features, packaged_correction
-from diefab.design import load_design
-from diefab.families.sampling import RANDOM_FAMILIES, design_record, random_design, record_design
-from diefab.fastmodel import fast_model, landing_probabilities
-from diefab.geometry import resting_faces
+from diefab.dice.design import load_design
+from diefab.dice.families.sampling import RANDOM_FAMILIES, design_record, random_design, record_design
+from diefab.geometry.polyhedron import resting_faces
+from diefab.models.correction import FEATURES, Correction, corner_shares, corrected, face_features, packaged_correction
+from diefab.models.fast import fast_model, landing_probabilities
 
 
 def _dice(k: int, seed: int = 7):
@@ -135,7 +135,7 @@ def test_random_dice_rest_on_every_face_and_are_reproducible(dice):
 def test_corner_shares_are_a_distribution_invariant_under_motion_and_scale(dice):
     from scipy.spatial.transform import Rotation
 
-    from diefab.geometry import Polyhedron
+    from diefab.geometry.polyhedron import Polyhedron
 
     for d in dice[:8]:
         poly = d.polyhedron
@@ -147,7 +147,7 @@ def test_corner_shares_are_a_distribution_invariant_under_motion_and_scale(dice)
 
 def test_corner_shares_of_a_box_are_uniform_whatever_its_proportions():
     # every corner of a box has defect pi/2 and three right angles: each face collects 4 * (pi/2) / 3 of 4 pi
-    from diefab.geometry import Polyhedron
+    from diefab.geometry.polyhedron import Polyhedron
 
     box = Polyhedron.from_points(np.array([[x, y, z] for x in (0, 3) for y in (0, 1) for z in (0, 0.4)], float))
     assert np.allclose(corner_shares(box), 1 / 6, atol=1e-12)

@@ -7,10 +7,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from diefab.design import load_design
-from diefab.errors import DesignError
-from diefab.families import GEM
-from diefab.fastmodel import (
+from diefab.core.errors import DesignError
+from diefab.dice.design import load_design
+from diefab.dice.families import GEM
+from diefab.geometry.polyhedron import face_margins
+from diefab.made.mass import Fill, mass_properties
+from diefab.models.fast import (
     FILL_COORDINATES,
     FILL_LAYERS,
     FillCorrection,
@@ -20,8 +22,6 @@ from diefab.fastmodel import (
     gem_discrepancy,
     landing_probabilities,
 )
-from diefab.geometry import face_margins
-from diefab.mass import Fill, mass_properties
 
 MIRRORS = ((0, 2), (1, 3), (5, 7), (6, 8))
 

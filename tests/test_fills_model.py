@@ -7,18 +7,18 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from diefab.design import load_design
-from diefab.errors import DesignError
-from diefab.fastmodel import (
+from diefab.core.errors import DesignError
+from diefab.dice.design import load_design
+from diefab.dice.readings import unreadable
+from diefab.made.mass import Fill, mass_properties
+from diefab.models.fast import (
     Discrepancy,
     fast_model,
     landing_probabilities,
     roll_retention,
 )
-from diefab.mass import Fill, mass_properties
-from diefab.models import FILL_MODELS, model_probabilities
-from diefab.optimize import Problem
-from diefab.readings import unreadable
+from diefab.models.probabilities import FILL_MODELS, model_probabilities
+from diefab.search.optimize import Problem
 
 MIRRORS = ((0, 2), (1, 3), (5, 7), (6, 8))
 
@@ -109,7 +109,7 @@ def test_the_shipped_4df_gems_are_read_from_faces_and_the_apex(name):
 
 
 def test_design_takes_the_fill_and_its_settings(run, bad, monkeypatch):
-    import diefab.synthesis
+    import diefab.search.synthesis
 
     seen = {}
 
@@ -117,7 +117,7 @@ def test_design_takes_the_fill_and_its_settings(run, bad, monkeypatch):
         seen.update(kw)
         raise DesignError("stopped here")
 
-    monkeypatch.setattr(diefab.synthesis, "synthesize", fake)
+    monkeypatch.setattr(diefab.search.synthesis, "synthesize", fake)
     line = bad("design", "4df", "--fill", "paper", "--card", "120", "--out", "/tmp/diefab-test-fills")
     assert "stopped here" in line
     assert seen["fill"] == Fill("paper", card_g_m2=120.0)
@@ -138,7 +138,7 @@ def test_chain_uses_the_inertia_it_is_given():
 
 
 def test_the_optimizer_scores_a_card_die_with_the_fill_aware_model():
-    from diefab.models import to_values
+    from diefab.models.probabilities import to_values
 
     d = replace(load_design("fudge-gem-sim"), fill=Fill("shell"))
     problem = Problem(d, ("a", "b", "c", "d", "e"), model="fast", objective="tvd")

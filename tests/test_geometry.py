@@ -9,10 +9,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from diefab.basins import RestBasins
-from diefab.errors import GeometryError
-from diefab.families import GEM, gem_polyhedron
-from diefab.geometry import Polyhedron, face_margins, resting_faces, solid_angles, up_faces
+from diefab.core.errors import GeometryError
+from diefab.dice.families import GEM, gem_polyhedron
+from diefab.geometry.polyhedron import Polyhedron, face_margins, resting_faces, solid_angles, up_faces
+from diefab.models.basins import RestBasins
 
 CUBE = [[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
 OCTAHEDRON = [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]]
@@ -188,7 +188,7 @@ def _unit(rng, n: int) -> np.ndarray:
 
 
 def _gem_design(params):
-    from diefab.design import load_design
+    from diefab.dice.design import load_design
 
     return load_design("fudge-gem").with_params(**params)
 
@@ -235,7 +235,7 @@ def test_gem_basins_follow_the_downhill_flow(params):
 
 
 def load_params():
-    from diefab.design import load_design
+    from diefab.dice.design import load_design
 
     return dict(load_design("fudge-gem").params)
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from test_transitional import _rounded_cube
 
-from diefab.design import design_to_toml
+from diefab.dice.design import design_to_toml
 
 pytestmark = pytest.mark.slow
 
@@ -76,7 +76,7 @@ def test_stl_is_sound(big):
 def test_net_command_writes_the_net(big, run, tmp_path):
     from dataclasses import replace
 
-    from diefab.mass import Fill
+    from diefab.made.mass import Fill
 
     design, _ = big
     path = tmp_path / "rounded.toml"  # glued edge to edge: 5 mm tabs would weigh enough to tip it onto f145

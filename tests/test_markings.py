@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 from shapely.geometry import LineString, Point, Polygon
 
-from diefab.design import load_design
-from diefab.fabricate.labels import design_axis, mark_frame, placed_marks
+from diefab.dice.design import load_design
 from diefab.fabricate.net import design_net
 from diefab.fabricate.sheet import _die_texts
-from diefab.fabricate.text import load_font
+from diefab.made.labels import design_axis, mark_frame, placed_marks
+from diefab.made.text import load_font
 
 #: A gem that reads +4 and -4 from an edge and 0 from its apex; the plain gem 0 from its apex.
 EDGE_GEM = dict(
@@ -24,7 +24,7 @@ DESIGNS = ("edge-gem", "fudge-gem")
 
 def _design(name: str):
     if name == "edge-gem":
-        from diefab.design import Design
+        from diefab.dice.design import Design
 
         return Design("edge-gem", "gem", **EDGE_GEM)
     return load_design(name)

@@ -7,10 +7,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from diefab.errors import DesignError
-from diefab.families import GEM, gem_center_of_mass_y, gem_polyhedron
-from diefab.geometry import Polyhedron
-from diefab.mass import Fill, inset, mass_properties, wall_depths
+from diefab.core.errors import DesignError
+from diefab.dice.families import GEM, gem_center_of_mass_y, gem_polyhedron
+from diefab.geometry.polyhedron import Polyhedron
+from diefab.made.mass import Fill, inset, mass_properties, wall_depths
 
 gem_params = st.fixed_dictionaries(
     {name: st.floats(p.lower, p.upper) for name, p in zip("abcd", GEM.parameters, strict=False)}
@@ -130,9 +130,9 @@ def test_card_thickness_moves_no_centre_and_tabs_add_their_own_area():
     # each face moves in along its normal; Σ area · normal = 0 for a closed surface
     np.testing.assert_allclose(bare.center, shell.center, atol=1e-12)
     assert bare.mass == pytest.approx(poly.surface_area)
-    from diefab.bodies import tab_shapes
-    from diefab.fabricate.unfold import unfold
-    from diefab.mass import tab_polygons
+    from diefab.made.bodies import tab_shapes
+    from diefab.made.mass import tab_polygons
+    from diefab.made.unfold import unfold
 
     net = unfold(poly, 15.0)
     tabs = tab_shapes(poly, 15.0, 5.0)
@@ -172,7 +172,7 @@ def test_print_walls_and_skins_of_a_cube():
 
 
 def test_an_engraved_label_takes_material_and_pulls_the_wall_in():
-    from diefab.mass import LabelMass
+    from diefab.made.mass import LabelMass
 
     fill = Fill("print", infill=0.2)
     bed = int(np.argmin(CUBE.normals[:, 2]))

@@ -14,8 +14,8 @@ import pytest
 
 from diefab import Design, Polyhedron, load_design
 from diefab.fabricate.net import design_net, render_net
-from diefab.fabricate.pages import PAGES, parse_page
-from diefab.fabricate.unfold import unfold
+from diefab.made.pages import PAGES, parse_page
+from diefab.made.unfold import unfold
 
 SVG = "{http://www.w3.org/2000/svg}"
 DESIGN_DIR = Path(__file__).resolve().parent.parent / "templates"
@@ -255,10 +255,10 @@ def test_size_error_names_a_size_that_works():
 
 
 def sheets_of(design, net, **kwargs):
-    from diefab.fabricate.labels import design_axis
     from diefab.fabricate.net import footer_texts
-    from diefab.fabricate.pages import pack_copies
     from diefab.fabricate.sheet import layout_sheets, plan_footer
+    from diefab.made.labels import design_axis
+    from diefab.made.pages import pack_copies
 
     plan = plan_footer(net.page.width, net.page.margin, *footer_texts(design, design.size_mm))
     values = [f for f in design.label_of if f not in design.labels]
@@ -270,7 +270,7 @@ def sheets_of(design, net, **kwargs):
 
 def _to_frame(design, net, k):
     """Affine map (page -> die frame of face k, mm), fitted from the face's corners alone."""
-    from diefab.fabricate.labels import design_axis, face_frame
+    from diefab.made.labels import design_axis, face_frame
 
     poly = design.polyhedron
     ring = poly.vertices[poly.faces[k]] * net.mm_per_unit
@@ -358,8 +358,8 @@ def test_real_outlines_keep_a_wide_label_inside_its_face():
 
 
 def test_marks_only_where_a_label_reads_as_another():
-    from diefab.fabricate.labels import label_shape
-    from diefab.fabricate.text import load_font, text_polygons
+    from diefab.made.labels import label_shape
+    from diefab.made.text import load_font, text_polygons
 
     font = load_font()
     d20 = [str(v) for v in range(1, 21)]
@@ -450,7 +450,7 @@ def test_svg_symbol_on_a_face(tmp_path):
     pytest.importorskip("svgelements")
     from shapely.geometry import Polygon
 
-    from diefab.fabricate.labels import symbol_shape
+    from diefab.made.labels import symbol_shape
 
     (tmp_path / "ring.svg").write_text(
         '<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">'

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from diefab import Polyhedron, load_design
-from diefab.bodies import net_tab_shapes
-from diefab.fabricate.symmetry import off_axis, symmetries
-from diefab.fabricate.unfold import unfold
-from diefab.mass import Fill, tab_polygons
+from diefab.geometry.symmetry import off_axis, symmetries
+from diefab.made.bodies import net_tab_shapes
+from diefab.made.mass import Fill, tab_polygons
+from diefab.made.unfold import unfold
 
 #: The tabs' centre of mass on the axis, mm (exact symmetry leaves rounding only).
 ON_AXIS_MM = 1e-9

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from diefab.design import load_design
-from diefab.errors import DesignError
-from diefab.optimize import Problem, optimize_design
+from diefab.core.errors import DesignError
+from diefab.dice.design import load_design
+from diefab.search.optimize import Problem, optimize_design
 
 
 @pytest.fixture(scope="module")
@@ -96,6 +96,6 @@ def test_unreadable_points_score_above_every_readable_stable_one():
 
 
 def _poly(params):
-    from diefab.families import gem_polyhedron
+    from diefab.dice.families import gem_polyhedron
 
     return gem_polyhedron(params)

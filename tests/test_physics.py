@@ -7,10 +7,10 @@ import pytest
 from scipy.spatial.transform import Rotation
 from scipy.stats import chi2
 
-from diefab.design import load_design
-from diefab.errors import PhysicsError
-from diefab.physics import PhysicsSettings, RollResult, classify_pose, drop, simulate
-from diefab.world import COCKED, World, die_body, fly, initial_conditions, run_batch
+from diefab.core.errors import PhysicsError
+from diefab.dice.design import load_design
+from diefab.physics.simulate import PhysicsSettings, RollResult, classify_pose, drop, simulate
+from diefab.physics.world import COCKED, World, die_body, fly, initial_conditions, run_batch
 
 pytest.importorskip("pybullet")
 
@@ -68,7 +68,7 @@ def test_world_classification_matches_rotation_convention(gem):
     body = die_body(gem.polyhedron, gem.mass_properties())
     for k in range(len(gem.polyhedron.faces)):
         quat = Rotation.from_matrix(face_down(gem, k) @ body.rotation).as_quat()
-        from diefab.world import resting_face
+        from diefab.physics.world import resting_face
 
         assert resting_face(body.normals, quat, 3.0) == k
     assert np.isclose(np.linalg.det(body.rotation), 1.0)
@@ -314,7 +314,7 @@ def test_cli_json_and_plot(tmp_path, run):
 
 
 def test_cli_interrupt_reports_finished_drops(gem, monkeypatch, run):
-    from diefab import physics
+    from diefab.physics.simulate import simulate as physics
 
     def interrupted(*args, **kwargs):
         raise physics.SimulationInterrupted(123, 1000)
@@ -360,7 +360,7 @@ def test_sigterm_stops_validate_cleanly_with_its_workers(tmp_path):
 
 @pytest.mark.parametrize("workers", [1, 2])
 def test_interrupt_stops_cleanly_and_counts_finished_drops(gem, workers):
-    from diefab.physics import SimulationInterrupted
+    from diefab.physics.simulate import SimulationInterrupted
 
     def progress(done, total):
         raise KeyboardInterrupt

@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from diefab.assignment import assign_values, face_classes
-from diefab.design import load_design
-from diefab.errors import DesignError
-from diefab.families import family
-from diefab.geometry import solid_angles
-from diefab.readings import markings, readings, unreadable
-from diefab.targets import parse_target
+from diefab.core.errors import DesignError
+from diefab.dice.assignment import assign_values, face_classes
+from diefab.dice.design import load_design
+from diefab.dice.families import family
+from diefab.dice.readings import markings, readings, unreadable
+from diefab.dice.targets import parse_target
+from diefab.geometry.polyhedron import solid_angles
 
 
 def test_the_papers_gem_is_read_on_faces_and_at_its_apex():
@@ -41,7 +41,7 @@ def test_parallel_faces_read_the_opposite_face_and_odd_prisms_an_edge():
 
 def test_markings_put_a_d4_style_value_in_every_corner_at_the_top_vertex():
     tetra = family("freeform").polyhedron({"n": 6})  # any die works; use a regular tetrahedron via planes
-    from diefab.families.planes import polyhedron_from_planes
+    from diefab.dice.families.planes import polyhedron_from_planes
 
     tetra = polyhedron_from_planes(np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]]), np.ones(4))
     values = {n: k + 1 for k, n in enumerate(tetra.names)}

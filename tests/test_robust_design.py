@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from diefab.cli import main
-from diefab.design import load_design
-from diefab.optimize import Problem
-from diefab.profiles import load_profile
+from diefab.dice.design import load_design
+from diefab.physics.profiles import load_profile
+from diefab.search.optimize import Problem
 
 
 def test_several_corrections_score_the_worst_of_them():
@@ -58,8 +58,8 @@ def test_design_refuses_a_bad_profile_or_robust_without_simulation(args, words, 
 
 @pytest.mark.slow
 def test_robust_refinement_drops_every_throw_and_keeps_the_worst(monkeypatch):
-    import diefab.synthesis as synthesis
-    from diefab.targets import parse_target
+    import diefab.search.synthesis as synthesis
+    from diefab.dice.targets import parse_target
 
     monkeypatch.setattr(synthesis, "REFINE_DROPS", 600)
     monkeypatch.setattr(synthesis, "MIN_THROW_DROPS", 300)

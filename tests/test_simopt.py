@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from diefab.cli import main
-from diefab.design import design_to_toml, load_design
-from diefab.physics import PhysicsSettings
-from diefab.simopt import RunError, RunLog, RunSpec, noise_floor, optimize_by_simulation, start_point
+from diefab.dice.design import design_to_toml, load_design
+from diefab.physics.simulate import PhysicsSettings
+from diefab.search.simopt import RunError, RunLog, RunSpec, noise_floor, optimize_by_simulation, start_point
 
 
 def _spec(**kw) -> RunSpec:
@@ -129,8 +129,8 @@ def test_a_stop_at_any_evaluation_keeps_a_best(method):
 
 def test_defect_correction_finds_the_minimax_of_the_corrected_model():
     """A 'simulation' that is the fast model plus a fixed defect per throw: the first re-fit is the answer."""
-    from diefab.models import model_probabilities
-    from diefab.optimize import OBJECTIVES, Problem, _polyhedron, candidate_mass, optimize_design
+    from diefab.models.probabilities import model_probabilities
+    from diefab.search.optimize import OBJECTIVES, Problem, _polyhedron, candidate_mass, optimize_design
 
     d = load_design("fudge-gem")
     names = ("a", "d")  # each round re-fits the fast model: two parameters keep that quick
@@ -243,7 +243,7 @@ def test_fast_model_through_optimize(tmp_path, capsys):
 
 
 def test_unreadable_candidates_are_infeasible_and_not_simulated():
-    from diefab.simopt import INFEASIBLE, UNLABELABLE, SimulationObjective
+    from diefab.search.simopt import INFEASIBLE, UNLABELABLE, SimulationObjective
 
     spec = _spec()
     objective = SimulationObjective(spec, workers=1)

@@ -7,12 +7,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from diefab.design import load_design
-from diefab.fastmodel import roll_retention
-from diefab.geometry import face_margins
-from diefab.mass import Fill, mass_properties
-from diefab.models import MODELS, value_probabilities
-from diefab.optimize import Problem, candidate_mass
+from diefab.dice.design import load_design
+from diefab.geometry.polyhedron import face_margins
+from diefab.made.mass import Fill, mass_properties
+from diefab.models.fast import roll_retention
+from diefab.models.probabilities import MODELS, value_probabilities
+from diefab.search.optimize import Problem, candidate_mass
 
 NAMES = ("a", "b", "c", "d")
 
@@ -56,8 +56,8 @@ def test_a_centre_the_candidate_no_longer_holds_is_infeasible():
 
 
 def test_simulation_optimizer_checks_feasibility_at_the_stated_centre():
-    from diefab.design import design_to_toml
-    from diefab.simopt import RunSpec, SimulationObjective
+    from diefab.dice.design import design_to_toml
+    from diefab.search.simopt import RunSpec, SimulationObjective
 
     d = weighted_gem(shift=(0.0, 0.25, 0.0))  # high and off the axis: some face no longer holds the die
     assert face_margins(d.polyhedron, np.array(d.center_of_mass))[d.resting_mask()].min() < 0.05

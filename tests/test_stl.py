@@ -13,8 +13,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from diefab.design import load_design
-from diefab.errors import FabricationError
+from diefab.core.errors import FabricationError
+from diefab.dice.design import load_design
 from diefab.fabricate.stl import (
     build_solid,
     cut_labels,
@@ -24,9 +24,9 @@ from diefab.fabricate.stl import (
     stl_bytes,
     threemf_bytes,
 )
-from diefab.fabricate.text import MINUS, ambiguous, load_font, needs_underline, stroke_width, text_polygons
-from diefab.geometry import solid_angles
-from diefab.mass import Fill, inset, mass_properties
+from diefab.geometry.polyhedron import solid_angles
+from diefab.made.mass import Fill, inset, mass_properties
+from diefab.made.text import MINUS, ambiguous, load_font, needs_underline, stroke_width, text_polygons
 
 
 @pytest.fixture(scope="module")
@@ -129,7 +129,7 @@ def test_uncut_com_is_the_solids_and_print_fill_matches_mass_module(gem):
 
 
 def test_probabilities_follow_the_shifted_com(gem, gem_solid):
-    from diefab.models import to_values
+    from diefab.models.probabilities import to_values
 
     r = gem_solid.report
     com = np.array(r["center_of_mass_mm"]["engraved"]) / 15.0

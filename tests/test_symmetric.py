@@ -5,13 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from diefab.design import Design
-from diefab.families import family
-from diefab.geometry import solid_angles
-from diefab.mass import Fill
-from diefab.models import MODELS, value_probabilities
-from diefab.readings import unreadable
-from diefab.symmetric import (
+from diefab.dice.design import Design
+from diefab.dice.families import family
+from diefab.dice.readings import unreadable
+from diefab.dice.targets import parse_target
+from diefab.geometry.polyhedron import solid_angles
+from diefab.made.mass import Fill
+from diefab.models.probabilities import MODELS, value_probabilities
+from diefab.search.symmetric import (
     MIN_TIPPING,
     _root,
     denominator,
@@ -24,8 +25,7 @@ from diefab.symmetric import (
     two_class_plans,
     two_class_values,
 )
-from diefab.synthesis import synthesize
-from diefab.targets import parse_target
+from diefab.search.synthesis import synthesize
 
 TARGETS = ["2d6", "3df", "binomial:4", "1:3,2:3,3:3,4:3,5:3,6:5", "uniform:3", "uniform:5", "1:1,2:2,3:1"]
 
@@ -156,7 +156,7 @@ def test_design_command_reports_how_the_die_carries_the_target(tmp_path, capsys)
     import json
 
     from diefab.cli import main
-    from diefab.design import load_design
+    from diefab.dice.design import load_design
 
     with pytest.raises(SystemExit) as exit_:
         main(["design", "binomial:4", "--model", "fast", "--validate-sims", "0", "--out", str(tmp_path), "--json"])

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 from diefab.cli import main
-from diefab.design import load_design
-from diefab.errors import DesignError
-from diefab.models import value_probabilities
-from diefab.readings import unreadable
-from diefab.synthesis import candidates, synthesize
-from diefab.targets import parse_target
+from diefab.core.errors import DesignError
+from diefab.dice.design import load_design
+from diefab.dice.readings import unreadable
+from diefab.dice.targets import parse_target
+from diefab.models.probabilities import value_probabilities
+from diefab.search.synthesis import candidates, synthesize
 
 
 def test_candidates_carry_every_value():
@@ -101,8 +101,8 @@ def test_design_command_refuses_bad_input_in_one_line(args, message, tmp_path, c
     ],
 )
 def test_optimize_works_for_every_family_with_parameters(family, params, target):
-    from diefab.optimize import optimize_design
-    from diefab.synthesis import Candidate, _start
+    from diefab.search.optimize import optimize_design
+    from diefab.search.synthesis import Candidate, _start
 
     start = _start(Candidate(family, params, 0), parse_target(target), "x", load_design("d6").fill, 30.0)
     before = np.abs(value_probabilities(start) - start.target_distribution.aligned(start.support)).sum()

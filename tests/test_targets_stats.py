@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from diefab.errors import StatsError, TargetError
-from diefab.stats import (
+from diefab.core.errors import StatsError, TargetError
+from diefab.dice.targets import parse_target
+from diefab.stats.goodness import (
     chi2_power,
     counts_from_rolls,
     expected_jsd,
@@ -21,7 +22,6 @@ from diefab.stats import (
     rolls_for_power,
     tvd,
 )
-from diefab.targets import parse_target
 
 TABLE2 = [0, 20, 48, 80, 89, 83, 66, 17, 2]
 

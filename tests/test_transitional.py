@@ -7,12 +7,12 @@ import json
 import numpy as np
 import pytest
 
-from diefab.basins import RestBasins
-from diefab.design import Design, design_to_toml, parse_design
-from diefab.errors import DesignError
-from diefab.families import gem_polyhedron
-from diefab.geometry import Polyhedron, resting_faces, solid_angles
-from diefab.models import MODELS, basin_shares, face_probabilities, value_probabilities
+from diefab.core.errors import DesignError
+from diefab.dice.design import Design, design_to_toml, parse_design
+from diefab.dice.families import gem_polyhedron
+from diefab.geometry.polyhedron import Polyhedron, resting_faces, solid_angles
+from diefab.models.basins import RestBasins
+from diefab.models.probabilities import MODELS, basin_shares, face_probabilities, value_probabilities
 
 #: A gem too flat for its girdle faces f1-f4: the die rolls off them onto f5-f9.
 TIPPY = gem_polyhedron({"a": 1.0, "b": 0.5, "c": 0.2, "d": 0.3})
@@ -79,7 +79,7 @@ def test_solid_angle_of_a_transitional_face_goes_where_the_flow_ends():
 
 
 def test_a_simulated_die_never_lands_on_a_transitional_face():
-    from diefab.physics import simulate
+    from diefab.physics.simulate import simulate
 
     d = tippy()
     result = simulate(d, 120, seed=3, workers=1)
@@ -155,7 +155,7 @@ def _rounded_cube(count: int = 16) -> Design:
 
 
 def test_a_die_with_hundreds_of_faces_predicts_and_rolls():
-    from diefab.physics import simulate
+    from diefab.physics.simulate import simulate
 
     d = _rounded_cube()
     assert len(d.polyhedron.faces) >= 500 and len(d.values) == 6

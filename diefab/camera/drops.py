@@ -15,9 +15,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..design import Design
-from ..physics import PhysicsSettings, _body
-from ..world import COCKED, LANE_COLUMNS, LANE_SPACING, LANES, World, _quat_to_matrix, initial_conditions, resting_face
+from diefab.dice.design import Design
+from diefab.physics.simulate import PhysicsSettings, _body
+from diefab.physics.world import (
+    COCKED,
+    LANE_COLUMNS,
+    LANE_SPACING,
+    LANES,
+    World,
+    _quat_to_matrix,
+    initial_conditions,
+    resting_face,
+)
 
 __all__ = ["Drop", "simulated_drop"]
 

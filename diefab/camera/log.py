@@ -24,8 +24,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import StatsError
-from ..files import atomic_write
+from diefab.core.errors import StatsError
+from diefab.core.files import atomic_write
 
 __all__ = ["HEADER", "LogRow", "append_roll", "read_log"]
 

@@ -24,9 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..design import Design
-from ..errors import DiefabError
-from ..made.markers import DICTIONARIES, MarkerLayout, marker_layout
+from diefab.core.errors import DiefabError
+from diefab.dice.design import Design
+from diefab.dice.markers import DICTIONARIES, MarkerLayout, marker_layout
 
 __all__ = [
     "DEFAULT_FOV",
@@ -128,7 +128,7 @@ class MarkerDetector:
     Parameters
     ----------
     layout : MarkerLayout
-        The die's markers (:func:`~diefab.made.markers.marker_layout`).
+        The die's markers (:func:`~diefab.dice.markers.marker_layout`).
     """
 
     def __init__(self, layout: MarkerLayout) -> None:
@@ -393,7 +393,7 @@ def read_frame(
 
 def layout_of(design: Design) -> MarkerLayout:
     """The design's markers, or :class:`MarkerError` when it carries none."""
-    from ..errors import DesignError
+    from diefab.core.errors import DesignError
 
     try:
         return marker_layout(design)

@@ -22,10 +22,19 @@ from pathlib import Path
 
 import numpy as np
 
-from ..design import Design
-from ..errors import DiefabError
-from .pose import DEFAULT_FOV, MIN_CONFIDENCE, Camera, FrameRead, MarkerDetector, MarkerError, layout_of, read_frame
-from .settle import Roll, Settler
+from diefab.camera.pose import (
+    DEFAULT_FOV,
+    MIN_CONFIDENCE,
+    Camera,
+    FrameRead,
+    MarkerDetector,
+    MarkerError,
+    layout_of,
+    read_frame,
+)
+from diefab.camera.settle import Roll, Settler
+from diefab.core.errors import DiefabError
+from diefab.dice.design import Design
 
 __all__ = ["IMAGE_SUFFIXES", "RollReader", "SourceError", "frames"]
 
@@ -193,6 +202,10 @@ def frames(
     """
     import cv2
 
+    try:  # a camera that cannot be opened is reported in one line, not in OpenCV's warnings too
+        cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
+    except AttributeError:
+        pass
     if sum(x is not None for x in (camera, video, images)) != 1:
         raise SourceError("give exactly one source: a camera, a video file or a folder of images")
     if images is not None:

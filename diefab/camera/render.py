@@ -19,9 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..design import Design
-from ..made.markers import MarkerLayout
-from .pose import Camera
+from diefab.camera.pose import Camera
+from diefab.dice.design import Design
+from diefab.dice.markers import MarkerLayout
 
 __all__ = ["Conditions", "View", "draw_detection", "random_conditions", "random_view", "render", "rest_pose"]
 
@@ -124,7 +124,7 @@ def random_conditions(rng: np.random.Generator, view: View, *, finger: float = 0
 
 
 def _marker_texture(layout: MarkerLayout, row: int, cell_px: int = 16) -> np.ndarray:
-    from ..made.markers import marker_cells
+    from diefab.dice.markers import marker_cells
 
     cells = marker_cells(layout.dictionary, int(layout.ids[row]))
     image = np.where(cells, 0.08, 1.0).astype(np.float32)

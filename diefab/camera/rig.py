@@ -15,10 +15,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..design import Design
-from ..made.markers import MarkerLayout
-from .drops import simulated_drop
-from .render import View, random_conditions, random_view, render, rest_pose
+from diefab.camera.drops import simulated_drop
+from diefab.camera.render import View, random_conditions, random_view, render, rest_pose
+from diefab.dice.design import Design
+from diefab.dice.markers import MarkerLayout
 
 __all__ = ["RenderedRest", "VideoFrame", "rendered_rests", "roll_video"]
 

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .pose import FrameRead
+from diefab.camera.pose import FrameRead
 
 __all__ = ["Roll", "Settler", "same_rest"]
 

@@ -5,7 +5,7 @@ One module per command or group of commands; shared options live in
 ``diefab: error: ...``, on stderr and exit status 2; a bug ends in one line and
 status 1.  Ctrl-C, SIGTERM and SIGHUP end a command cleanly with status 130.
 Outputs are written atomically, as one transaction per command, never over an
-input (:mod:`diefab.files`).
+input (:mod:`diefab.core.files`).
 """
 
 from __future__ import annotations
@@ -15,16 +15,16 @@ import sys
 
 import click
 
-from ..errors import DiefabError
-from .calibrate import calibrate
-from .design import design
-from .net import net
-from .optimize import optimize
-from .predict import predict, templates
-from .read import read
-from .stats import stats
-from .stl import stl
-from .validate import validate
+from diefab.cli.calibrate import calibrate
+from diefab.cli.design import design
+from diefab.cli.net import net
+from diefab.cli.optimize import optimize
+from diefab.cli.predict import predict, templates
+from diefab.cli.read import read
+from diefab.cli.stats import stats
+from diefab.cli.stl import stl
+from diefab.cli.validate import validate
+from diefab.core.errors import DiefabError
 
 __all__ = ["cli", "main"]
 

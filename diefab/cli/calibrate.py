@@ -7,9 +7,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..calibrate import DEFAULT_FREE
-from ..files import atomic_write, check_outputs, output_path
-from .common import (
+from diefab.cli.common import (
     check_resume_folder,
     console,
     emit_json,
@@ -20,6 +18,8 @@ from .common import (
     refuse_options,
     run_logged,
 )
+from diefab.core.files import atomic_write, check_outputs, output_path
+from diefab.search.calibrate import DEFAULT_FREE
 
 
 def _parse_bounds(items: tuple[str, ...]) -> dict[str, tuple[float, float]]:
@@ -41,7 +41,7 @@ def _parse_bounds(items: tuple[str, ...]) -> dict[str, tuple[float, float]]:
 
 
 def _dice(die_args, realrolls):
-    from ..calibrate import real_die, realrolls_die
+    from diefab.search.calibrate import real_die, realrolls_die
 
     dice = []
     for spec, counts in die_args:
@@ -110,10 +110,10 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
     resumed with --resume OUT/NAME; the profile OUT/NAME/NAME.toml is what
     validate and optimize take with --physics.
     """
-    from ..calibrate import CalibrationError, CalibrationLog, make_spec
-    from ..physics import PhysicsSettings
-    from ..profiles import load_profile
-    from ..simopt import RunError
+    from diefab.physics.profiles import load_profile
+    from diefab.physics.simulate import PhysicsSettings
+    from diefab.search.calibrate import CalibrationError, CalibrationLog, make_spec
+    from diefab.search.simopt import RunError
 
     for value, hint in ((sims_per_eval, "--sims-per-eval"), (max_evals, "--max-evals"), (workers, "--workers")):
         if value is not None and value <= 0:
@@ -168,7 +168,7 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
     check_outputs([output_path(log.folder, run_name, ".toml")])  # the profile: refused now, not at the first best
     client = None
     if scheduler is not None:  # before the run folder exists: a wrong address leaves nothing behind
-        from ..physics import dask_client
+        from diefab.physics.simulate import dask_client
 
         client, _ = dask_client(scheduler)
     if resume is None:
@@ -184,10 +184,10 @@ def run(spec, log, run_name, history, budget, max_evals, workers, client, as_jso
     `client` is a Dask client or None (local workers).  A `fresh` run that fails before its first
     evaluation leaves no run folder behind.
     """
-    from ..calibrate import calibrate as fit
-    from ..calibrate import curvature, die_report, grid_interval
-    from ..profiles import profile_to_toml
-    from .optimize import _simulation_view
+    from diefab.cli.optimize import _simulation_view
+    from diefab.physics.profiles import profile_to_toml
+    from diefab.search.calibrate import calibrate as fit
+    from diefab.search.calibrate import curvature, die_report, grid_interval
 
     dice = spec.real_dice
     profile_path = output_path(log.folder, run_name, ".toml")
@@ -228,7 +228,7 @@ def run(spec, log, run_name, history, budget, max_evals, workers, client, as_jso
     )  # fmt: skip
     best = result.best
     if best is None:
-        from ..calibrate import CalibrationError
+        from diefab.search.calibrate import CalibrationError
 
         if result.evaluations == 0:
             raise CalibrationError(f"the budget ran out before the first evaluation (--resume {log.folder})")

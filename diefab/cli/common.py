@@ -9,8 +9,8 @@ from typing import Any
 import click
 import numpy as np
 
-from ..design import Design, load_design
-from ..errors import OutputError
+from diefab.core.errors import OutputError
+from diefab.dice.design import Design, load_design
 
 
 def console(stderr: bool = False):
@@ -36,7 +36,7 @@ def _json_default(obj: Any):
 
 def note_fast_fill(d: Design, model: str, fill: str) -> None:
     """One line on stderr when the fast model's gem correction would be extrapolated to another fill."""
-    from ..fastmodel import fill_discrepancy
+    from diefab.models.fast import fill_discrepancy
 
     if model == "fast" and d.family == "gem" and fill != "solid" and fill_discrepancy(fill) is None:
         click.echo(
@@ -85,8 +85,8 @@ def get_design(spec: str, params: tuple[str, ...] = (), target: str | None = Non
 
 def design_inputs(spec: str, design: Design) -> list[Path]:
     """The files DESIGN was read from (design file or template, mesh, SVG symbols): no output may replace them."""
-    from ..design import template_path
-    from ..errors import DiefabError
+    from diefab.core.errors import DiefabError
+    from diefab.dice.design import template_path
 
     files = []
     if Path(spec).is_file():
@@ -120,7 +120,7 @@ def free_parameters(design: Design, free: str | None) -> list[str] | None:
     """``--free a,b,c`` -> the named parameters of the design's family (None when not given)."""
     if free is None:
         return None
-    from ..families import family
+    from diefab.dice.families import family
 
     names = [n.strip() for n in free.split(",") if n.strip()]
     known = [p.name for p in family(design.family).parameters if not p.integer]
@@ -201,8 +201,8 @@ def physics_file_option(func):
 
 def physics_settings(design: Design, profile: str | None = None, **overrides):
     """The design's [physics] table, then `profile` (a name or file), then the command-line `overrides`."""
-    from ..physics import PhysicsSettings
-    from ..profiles import load_profile
+    from diefab.physics.profiles import load_profile
+    from diefab.physics.simulate import PhysicsSettings
 
     if profile is None:
         return PhysicsSettings.from_mapping(design.physics, **overrides)
@@ -210,7 +210,7 @@ def physics_settings(design: Design, profile: str | None = None, **overrides):
 
 
 def physics_options(func):
-    """Options that override the design's [physics] table (see diefab.physics.PhysicsSettings)."""
+    """Options that override the design's [physics] table (see diefab.physics.simulate.PhysicsSettings)."""
     options = [
         ("--restitution", float, "Restitution of die and ground, in [0, 1] (default 0.3)."),
         ("--friction", float, "Friction of die and ground, >= 0 (default 0.8)."),
@@ -350,9 +350,9 @@ def pop_fill(options: dict) -> dict:
 
 def paper_balance(design: Design, net, spec: str, **card):
     """The balance of the paper die `net` makes (its own tabs; card settings from options or the design)."""
-    from ..balance import made_balance
-    from ..bodies import net_tab_shapes
-    from ..mass import mass_properties
+    from diefab.made.bodies import net_tab_shapes
+    from diefab.made.mass import mass_properties
+    from diefab.models.balance import made_balance
 
     base = design if design.fill.kind == "paper" else apply_fill(design, "paper")
     fill = apply_fill(base, None, **card).fill
@@ -365,7 +365,7 @@ def paper_balance(design: Design, net, spec: str, **card):
 
 def print_balance(design: Design, solid, fill, spec: str):
     """The balance of the print of `solid` (walls, skins, infill and engraving as built)."""
-    from ..balance import made_balance
+    from diefab.models.balance import made_balance
 
     r = solid.report
     center = np.asarray(r["center_of_mass_mm"]["printed"]) / r["mm_per_unit"]

@@ -9,7 +9,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from .common import (
+from diefab.cli.common import (
     FILL_OPTIONS,
     check_fill_options,
     console,
@@ -72,14 +72,14 @@ def design(target, faces, family_name, model, budget, name, seed, size_mm, min_m
     """
     from dataclasses import replace
 
-    from ..design import design_to_toml
-    from ..files import atomic_write, ensure_dir, output_path
-    from ..mass import Fill
-    from ..physics import PhysicsSettings, simulate
-    from ..profiles import STANDARD, load_profile
-    from ..stats import goodness_of_fit, pearson_divergence, tvd
-    from ..synthesis import synthesize
-    from ..targets import parse_target
+    from diefab.core.files import atomic_write, ensure_dir, output_path
+    from diefab.dice.design import design_to_toml
+    from diefab.dice.targets import parse_target
+    from diefab.made.mass import Fill
+    from diefab.physics.profiles import STANDARD, load_profile
+    from diefab.physics.simulate import PhysicsSettings, simulate
+    from diefab.search.synthesis import synthesize
+    from diefab.stats.goodness import goodness_of_fit, pearson_divergence, tvd
 
     t0 = time.monotonic()
     goal = parse_target(target)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .common import (
+from diefab.cli.common import (
     design_argument,
     design_inputs,
     emit_json,
@@ -46,10 +46,10 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
     The SVG has Inkscape layers print, score (blue, dashed) and cut (red, one
     closed outline per piece) for cutting machines; all text is outlines.
     """
-    from ..fabricate.labels import reading_note, small_die_warning
-    from ..fabricate.net import design_net, parse_formats, render_net
-    from ..fabricate.pages import parse_page
-    from ..files import check_outputs, ensure_dir, output_path, write_files
+    from diefab.core.files import check_outputs, ensure_dir, output_path, write_files
+    from diefab.fabricate.net import design_net, parse_formats, render_net
+    from diefab.made.labels import reading_note, small_die_warning
+    from diefab.made.pages import parse_page
 
     kinds = parse_formats(formats)
     sheet = parse_page(page)
@@ -68,7 +68,7 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
     balance = paper_balance(d, the_net, design, **card)
     if balance.warning:
         click.echo(f"diefab: warning: {balance.warning}", err=True)
-    from ..fabricate.pages import pack_copies
+    from diefab.made.pages import pack_copies
 
     n_pages = max(n.n_pages for n in pack_copies(the_net, copies))
     if as_json:

@@ -8,9 +8,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..design import format_value
-from ..files import atomic_write, check_outputs, ensure_dir, output_path, safe_name
-from .common import (
+from diefab.cli.common import (
     apply_fill,
     check_resume_folder,
     console,
@@ -32,6 +30,8 @@ from .common import (
     simulation_options,
     values_dict,
 )
+from diefab.core.files import atomic_write, check_outputs, ensure_dir, output_path, safe_name
+from diefab.dice.design import format_value
 
 
 @click.command()
@@ -77,8 +77,8 @@ def optimize(ctx, design, params, model, target, seed, min_margin, starts, free,
     (diefab validate's physics); the run is logged in OUT/NAME/ and can be
     resumed with --resume OUT/NAME.  --physics PROFILE sets its physics.
     """
-    from ..design import design_to_toml
-    from ..optimize import optimize_design
+    from diefab.dice.design import design_to_toml
+    from diefab.search.optimize import optimize_design
 
     fill = pop_fill(sim)
     if model == "simulation":
@@ -201,10 +201,10 @@ def _simulation_view(spec, budget_s: float, history):
 def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, free, objective, name, robust,
                         physics_profile, out_dir, as_json, sims_per_eval, max_sims_per_eval, budget, resume, method,
                         start_model, sigma, max_evals, workers, scheduler, fill=None) -> None:  # fmt: skip
-    """``diefab optimize DESIGN --model simulation``: see :mod:`diefab.simopt`."""
-    from ..design import design_to_toml
-    from ..families import family
-    from ..simopt import RunError, RunLog, RunSpec, best_design, optimize_by_simulation, start_point
+    """``diefab optimize DESIGN --model simulation``: see :mod:`diefab.search.simopt`."""
+    from diefab.dice.design import design_to_toml
+    from diefab.dice.families import family
+    from diefab.search.simopt import RunError, RunLog, RunSpec, best_design, optimize_by_simulation, start_point
 
     if not (np.isfinite(budget) and budget > 0):
         raise click.BadParameter(f"{budget} must be a positive number of minutes", param_hint="--budget")
@@ -280,7 +280,7 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         physics = physics_settings(d, physics_profile)
         throws = ()
         if robust:
-            from ..profiles import STANDARD, load_profile
+            from diefab.physics.profiles import STANDARD, load_profile
 
             throws = tuple(load_profile(p, base=physics.as_dict()).as_dict() for p in STANDARD)
         x0 = start_point(d, names, model=start_model, objective=objective, min_margin=min_margin, starts=starts,
@@ -298,7 +298,7 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
     max_evals = spec.max_evaluations
     client = None
     if scheduler is not None:  # before the run folder exists: a wrong address leaves nothing behind
-        from ..physics import dask_client
+        from diefab.physics.simulate import dask_client
 
         client, _ = dask_client(scheduler)
     if fresh:
@@ -367,7 +367,7 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         f"min margin {best['min_margin']:.4f}"
     )
     if spec.robust and best.get("objectives"):
-        from ..profiles import STANDARD
+        from diefab.physics.profiles import STANDARD
 
         con.print(f"worst over {len(spec.robust)} throws and tables; each: "
                   + "  ".join(f"{n} {o:.5f}" for n, o in zip(STANDARD, best["objectives"])))  # fmt: skip

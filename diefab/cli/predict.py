@@ -4,8 +4,7 @@ from __future__ import annotations
 
 import click
 
-from ..design import format_value
-from .common import (
+from diefab.cli.common import (
     apply_fill,
     console,
     design_argument,
@@ -18,13 +17,14 @@ from .common import (
     pop_fill,
     values_dict,
 )
+from diefab.dice.design import format_value
 
 
 @click.command()
 @json_option
 def templates(as_json: bool) -> None:
     """List the shipped design templates."""
-    from ..design import list_templates
+    from diefab.dice.design import list_templates
 
     designs = list_templates()
     if as_json:
@@ -45,8 +45,8 @@ def templates(as_json: bool) -> None:
 def predict(design: str, params, model: str, target: str | None, as_json: bool, **fill) -> None:
     """Landing probabilities, centre of mass and stability margins of DESIGN."""
 
-    from ..models import face_probabilities, to_values
-    from ..stats import jsd, pearson_divergence, tvd
+    from diefab.models.probabilities import face_probabilities, to_values
+    from diefab.stats.goodness import jsd, pearson_divergence, tvd
 
     d = apply_fill(get_design(design, params, target), **pop_fill(fill))
     fill_model = d.fill
@@ -55,7 +55,7 @@ def predict(design: str, params, model: str, target: str | None, as_json: bool, 
     poly = d.polyhedron
     bound = None
     if model == "basins":
-        from ..models import basin_shares
+        from diefab.models.probabilities import basin_shares
 
         faces, bound = basin_shares(poly, d.mass_properties(fill_model).center)
     else:
@@ -67,7 +67,7 @@ def predict(design: str, params, model: str, target: str | None, as_json: bool, 
     transitional = d.transitional_faces
     rolls_to = {}
     if transitional:
-        from ..basins import RestBasins
+        from diefab.models.basins import RestBasins
 
         targets = RestBasins.of(poly, com).targets
         rolls_to = {n: poly.names[targets[k]] for k, n in enumerate(poly.names) if n in transitional}

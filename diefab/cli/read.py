@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from .common import design_argument, get_design, out_option
+from diefab.cli.common import design_argument, get_design, out_option
 
 
 @click.command("read")
@@ -36,10 +36,10 @@ def read(design, params, camera_index, video, images, name, settle, min_confiden
     """
     from filelock import FileLock, Timeout
 
-    from ..camera.log import read_log
-    from ..camera.reader import RollReader, frames
-    from ..errors import OutputError
-    from ..files import ensure_dir, output_path
+    from diefab.camera.log import read_log
+    from diefab.camera.reader import RollReader, frames
+    from diefab.core.errors import OutputError
+    from diefab.core.files import ensure_dir, output_path
 
     if sum(x is not None for x in (camera_index, video, images)) != 1:
         raise click.UsageError("give exactly one of --camera, --video and --images")
@@ -63,8 +63,8 @@ def read(design, params, camera_index, video, images, name, settle, min_confiden
 def _run(d, reader, source, log, rows, show, out_dir, name, photos: bool) -> None:
     from rich.live import Live
 
-    from ..camera.log import LogRow, append_roll
-    from .common import console
+    from diefab.camera.log import LogRow, append_roll
+    from diefab.cli.common import console
 
     offset = max((r.frame for r in rows), default=-1) + 1
     with Live(_table(d, rows, reader), console=console(), refresh_per_second=4, transient=False) as live:
@@ -89,7 +89,7 @@ def _run(d, reader, source, log, rows, show, out_dir, name, photos: bool) -> Non
 def _table(d, rows, reader):
     from rich.table import Table
 
-    from ..design import format_value
+    from diefab.dice.design import format_value
 
     signed = min(d.support) < 0
     counts = {v: 0 for v in d.support}
@@ -115,8 +115,8 @@ def _table(d, rows, reader):
 def _show(d, reader, gray, seen, out_dir, name) -> None:
     import cv2
 
-    from ..camera.render import draw_detection
-    from ..files import atomic_write, output_path
+    from diefab.camera.render import draw_detection
+    from diefab.core.files import atomic_write, output_path
 
     image = draw_detection(gray, seen, d, reader.layout, reader.camera)
     try:

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import click
 
-from ..design import format_value
-from .common import console, emit_json, json_option, seed_option
+from diefab.cli.common import console, emit_json, json_option, seed_option
+from diefab.dice.design import format_value
 
 
 @click.command()
@@ -24,9 +24,16 @@ from .common import console, emit_json, json_option, seed_option
 @json_option
 def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, seed: int, as_json: bool) -> None:
     """Test rolls against a target: chi2, G, TVD, JSD, intervals, power."""
-    from ..errors import StatsError
-    from ..stats import chi2_power, counts_from_rolls, goodness_of_fit, parse_counts, read_rolls, rolls_for_power
-    from ..targets import parse_target
+    from diefab.core.errors import StatsError
+    from diefab.dice.targets import parse_target
+    from diefab.stats.goodness import (
+        chi2_power,
+        counts_from_rolls,
+        goodness_of_fit,
+        parse_counts,
+        read_rolls,
+        rolls_for_power,
+    )
 
     if (counts is None) == (rolls is None):
         raise click.UsageError("give exactly one of --counts and --rolls")

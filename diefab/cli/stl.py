@@ -6,9 +6,7 @@ from pathlib import Path
 
 import click
 
-from ..errors import DiefabError
-from ..files import check_outputs, ensure_dir, output_path, write_files
-from .common import (
+from diefab.cli.common import (
     apply_fill,
     design_argument,
     design_inputs,
@@ -19,7 +17,9 @@ from .common import (
     out_option,
     print_balance,
 )
-from .net import SIZE_HELP
+from diefab.cli.net import SIZE_HELP
+from diefab.core.errors import DiefabError
+from diefab.core.files import check_outputs, ensure_dir, output_path, write_files
 
 
 @click.command("stl")
@@ -75,11 +75,11 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face
         min_stroke, min_text_height, margin_mm, density, fit_each, preview, out_dir, as_json,
         **settings) -> None:  # fmt: skip
     """Printable STL/3MF of DESIGN with its values engraved; report volume, mass and balance."""
-    from ..design import format_value
-    from ..errors import FabricationError
-    from ..fabricate.formats import inlay_stl_bytes, stl_bytes, threemf_bytes
-    from ..fabricate.labels import reading_note
-    from ..fabricate.stl import build_solid
+    from diefab.core.errors import FabricationError
+    from diefab.dice.design import format_value
+    from diefab.fabricate.formats import inlay_stl_bytes, stl_bytes, threemf_bytes
+    from diefab.fabricate.stl import build_solid
+    from diefab.made.labels import reading_note
 
     kinds = [f.strip().lower() for f in formats.split(",") if f.strip()]
     bad = [f for f in kinds if f not in ("stl", "3mf")]
@@ -107,7 +107,7 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face
     if inlay:
         payloads[names["inlay"]] = inlay_stl_bytes(solid)
     if preview:
-        from ..fabricate.preview import render_preview
+        from diefab.fabricate.preview import render_preview
 
         payloads[names["preview"]] = render_preview(solid)
     written = [str(p) for p in write_files(payloads, inputs=inputs)]

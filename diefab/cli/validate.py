@@ -8,8 +8,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from ..design import format_value
-from .common import (
+from diefab.cli.common import (
     apply_fill,
     console,
     design_argument,
@@ -27,6 +26,7 @@ from .common import (
     seed_option,
     values_dict,
 )
+from diefab.dice.design import format_value
 
 
 @click.command()
@@ -56,11 +56,11 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, tar
     """
     import os
 
-    from ..errors import PhysicsError
-    from ..files import atomic_write, check_outputs, ensure_dir
-    from ..models import value_probabilities
-    from ..physics import SimulationInterrupted, plot_validation, simulate
-    from ..stats import goodness_of_fit
+    from diefab.core.errors import PhysicsError
+    from diefab.core.files import atomic_write, check_outputs, ensure_dir
+    from diefab.models.probabilities import value_probabilities
+    from diefab.physics.simulate import SimulationInterrupted, plot_validation, simulate
+    from diefab.stats.goodness import goodness_of_fit
 
     fill = pop_fill(physics)
     if scheduler is not None:
@@ -171,8 +171,8 @@ def _sensitivity(d, base, sims, seed, workers, scheduler, as_json, overrides) ->
     """``validate --sensitivity``: the TVD to the target under each standard profile."""
     from dataclasses import replace
 
-    from ..physics import SimulationInterrupted
-    from ..profiles import STANDARD, sensitivity
+    from diefab.physics.profiles import STANDARD, sensitivity
+    from diefab.physics.simulate import SimulationInterrupted
 
     try:
         rows = sensitivity(replace(d, physics=base.as_dict()), STANDARD, sims, seed=seed, workers=workers,

@@ -16,11 +16,11 @@ from typing import Any
 
 import numpy as np
 
-from ..design import Design
-from ..errors import FabricationError
-from ..geometry import Polyhedron
-from .labels import MARK_FRACTION, design_axis, face_frame, fit_label, label_shape, mark_frame, placed_marks
-from .text import Font, stroke_width, thin_fraction
+from diefab.core.errors import FabricationError
+from diefab.dice.design import Design
+from diefab.geometry.polyhedron import Polyhedron
+from diefab.made.labels import MARK_FRACTION, design_axis, face_frame, fit_label, label_shape, mark_frame, placed_marks
+from diefab.made.text import Font, stroke_width, thin_fraction
 
 __all__ = ["Label", "Labelling", "checked", "cut_labels", "cutter", "label_faces", "stroke_warnings"]
 
@@ -45,7 +45,7 @@ class Label:
     height_mm : float
         Digit height of the text.
     stroke_mm : float
-        Mean stroke width (:func:`~diefab.fabricate.text.stroke_width`).
+        Mean stroke width (:func:`~diefab.made.text.stroke_width`).
     thin_fraction : float
         Share of the text area in strokes thinner than ``min_stroke``.
     area_mm2 : float
@@ -166,7 +166,7 @@ def _fitted_label(face, text, glyphs, height, cx, cy, origin, baseline, up, norm
 
 
 def _place_mark(poly, m, flat, axis, font, texts, mark, pips, margin_mm, min_stroke_mm, scale) -> Label | None:
-    """A value read at a corner or along an edge (:class:`~diefab.readings.Marking` `m`) on its face, as a Label.
+    """A value read at a corner or along an edge (:class:`~diefab.dice.readings.Marking` `m`) on its face, as a Label.
 
     The text lies in the face shrunk toward that corner or the edge's middle
     (:func:`~.labels.mark_frame`), its top toward it, at most

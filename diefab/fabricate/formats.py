@@ -8,10 +8,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import FabricationError
+from diefab.core.errors import FabricationError
 
 if TYPE_CHECKING:
-    from .stl import Solid
+    from diefab.fabricate.stl import Solid
 
 __all__ = ["BODY_COLOR", "LABEL_COLOR", "inlay_stl_bytes", "stl_bytes", "threemf_bytes"]
 

@@ -1,4 +1,4 @@
-"""Paper nets of designs: the glue between a :class:`~diefab.design.Design` and the net renderers.
+"""Paper nets of designs: the glue between a :class:`~diefab.dice.design.Design` and the net renderers.
 
 Examples
 --------
@@ -14,13 +14,13 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from ..design import Design
-from ..errors import FabricationError
-from .labels import design_axis, placed_marks, reading_note
-from .pages import Page, pack_copies, parse_page
-from .tabs import TAB_WIDTH
-from .text import MARKS
-from .unfold import Net, unfold
+from diefab.core.errors import FabricationError
+from diefab.dice.design import Design
+from diefab.made.labels import design_axis, placed_marks, reading_note
+from diefab.made.pages import Page, pack_copies, parse_page
+from diefab.made.tabs import TAB_WIDTH
+from diefab.made.text import MARKS
+from diefab.made.unfold import Net, unfold
 
 __all__ = ["FORMATS", "design_net", "footer_texts", "parse_formats", "render_net"]
 
@@ -50,7 +50,7 @@ def design_net(
 
     The page's footer is made as tall as its wrapped text needs at this page width.
     """
-    from .sheet import plan_footer
+    from diefab.fabricate.sheet import plan_footer
 
     size = design.size_mm if size_mm is None else size_mm
     if not (isinstance(size, (int, float)) and math.isfinite(size) and size > 0):
@@ -86,7 +86,7 @@ def render_net(
     pips : bool
         Draw value labels 1 to 9 as pips.
     """
-    from .sheet import layout_sheets, plan_footer
+    from diefab.fabricate.sheet import layout_sheets, plan_footer
 
     if mark not in MARKS:
         raise FabricationError(f"mark {mark!r} is not one of {', '.join(MARKS)}")
@@ -100,15 +100,15 @@ def render_net(
     out: dict[str, bytes] = {}
     for fmt in formats:
         if fmt == "svg":
-            from .svg import render_svg
+            from diefab.fabricate.svg import render_svg
 
             out[fmt] = render_svg(sheets).encode("utf-8")
         elif fmt == "pdf":
-            from .pdf import render_pdf
+            from diefab.fabricate.pdf import render_pdf
 
             out[fmt] = render_pdf(sheets)
         elif fmt == "png":
-            from .pdf import render_png
+            from diefab.fabricate.pdf import render_png
 
             out[fmt] = render_png(sheets)
         else:

@@ -13,8 +13,8 @@ import io
 
 import numpy as np
 
-from .sheet import Sheet
-from .svg import CUT_COLOR, CUT_MM, FACE_FILL, FOLD_MM, SCORE_COLOR, TAB_FILL
+from diefab.fabricate.sheet import Sheet
+from diefab.fabricate.svg import CUT_COLOR, CUT_MM, FACE_FILL, FOLD_MM, SCORE_COLOR, TAB_FILL
 
 __all__ = ["render_pdf", "render_png"]
 

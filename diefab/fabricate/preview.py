@@ -13,8 +13,8 @@ import io
 
 import numpy as np
 
-from .labels import design_axis, reading_note
-from .stl import Solid
+from diefab.fabricate.stl import Solid
+from diefab.made.labels import design_axis, reading_note
 
 __all__ = ["render_preview"]
 

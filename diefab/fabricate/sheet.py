@@ -1,7 +1,7 @@
 """What goes on each printed page of a net: shapes, lines and text outlines, in mm.
 
 :func:`layout_sheets` turns one or more copies of a
-:class:`~diefab.fabricate.unfold.Net` into one :class:`Sheet` per page; the
+:class:`~diefab.made.unfold.Net` into one :class:`Sheet` per page; the
 SVG and PDF renderers draw the same sheets, so both outputs carry the same
 labels in the same places.  Every piece of text is a shapely outline of the
 real font (:mod:`.text`), so what is measured is what is printed, and an SVG
@@ -28,9 +28,9 @@ from typing import Any
 
 import numpy as np
 
-from .labels import MARK_FRACTION, face_frame, fit_label, label_shape, mark_frame
-from .text import Font, load_font, text_advance, text_outline
-from .unfold import Net
+from diefab.made.labels import MARK_FRACTION, face_frame, fit_label, label_shape, mark_frame
+from diefab.made.text import Font, load_font, text_advance, text_outline
+from diefab.made.unfold import Net
 
 __all__ = ["FooterPlan", "Sheet", "Text", "layout_sheets", "plan_footer"]
 

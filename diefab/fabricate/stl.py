@@ -38,7 +38,7 @@ Without rounding this is exactly the paper's solid-angle model.
 
 Examples
 --------
->>> from diefab.design import load_design
+>>> from diefab.dice.design import load_design
 >>> solid = build_solid(load_design("d6").with_params(), size_mm=16)
 >>> solid.watertight, solid.bodies, solid.genus
 (True, 1, 0)
@@ -54,15 +54,15 @@ from typing import Any
 
 import numpy as np
 
-from .. import tolerances as tol
-from ..design import Design
-from ..errors import FabricationError
-from ..geometry import Polyhedron
-from ..mass import Fill, bed_face, inset
-from .engrave import Label, Labelling, checked, cut_labels, cutter, label_faces, stroke_warnings
-from .formats import inlay_stl_bytes, stl_bytes, threemf_bytes
-from .labels import small_die_warning
-from .text import Font, load_font
+from diefab.core import tolerances as tol
+from diefab.core.errors import FabricationError
+from diefab.dice.design import Design
+from diefab.fabricate.engrave import Label, Labelling, checked, cut_labels, cutter, label_faces, stroke_warnings
+from diefab.fabricate.formats import inlay_stl_bytes, stl_bytes, threemf_bytes
+from diefab.geometry.polyhedron import Polyhedron
+from diefab.made.labels import small_die_warning
+from diefab.made.mass import Fill, bed_face, inset
+from diefab.made.text import Font, load_font
 
 __all__ = [
     "Label",
@@ -578,13 +578,13 @@ def _printed(design, print_fill, labels, raised, depth_mm, bed_index, round_mm, 
     """Volume (mm³) and centre (mm, of the hull's body) of the print as laid down, and whether its core is hollow.
 
     A sharp die: walls, top and bottom skins and infill as the slicer lays
-    them, labels included (:func:`diefab.mass.mass_properties`).  A rounded
+    them, labels included (:func:`diefab.made.mass.mass_properties`).  A rounded
     one: walls of uniform thickness inside the rounded body around an infilled
     core (solid when the walls meet).
     """
     poly, scale = design.polyhedron, design.mm_per_unit
     if round_mm == 0:
-        from ..mass import LabelMass, mass_properties
+        from diefab.made.mass import LabelMass, mass_properties
 
         label_mass = tuple(
             LabelMass(
@@ -617,7 +617,7 @@ def _printed(design, print_fill, labels, raised, depth_mm, bed_index, round_mm, 
 
 def _predictions(design, flat, round_mm, sharp_mm, centers) -> dict[str, dict[str, float]]:
     """Per-value landing probabilities (solid-angle model) of the sharp die and of each stage in `centers`."""
-    from ..models import solid_angle_model, to_values
+    from diefab.models.probabilities import solid_angle_model, to_values
 
     poly, scale = design.polyhedron, design.mm_per_unit
 

@@ -19,7 +19,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from .sheet import Sheet
+from diefab.fabricate.sheet import Sheet
 
 __all__ = ["CUT_COLOR", "SCORE_COLOR", "render_svg", "shape_path"]
 

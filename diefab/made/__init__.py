@@ -1,1 +1,2 @@
-"""The die as it is made: what fabrication adds to the ideal polyhedron (markers, labels, tabs)."""
+"""How a die is made: materials and fills, the paper net's plan and tabs, labels as regions on faces,
+and the mass of the body as made."""

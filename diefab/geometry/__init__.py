@@ -1,0 +1,1 @@
+"""Convex polyhedra, closed meshes, their symmetries, spanning trees and plane layouts: pure geometry."""

@@ -1,0 +1,124 @@
+"""Pages of a net: paper sizes, and shelf packing of pieces (and of several copies) onto pages."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from diefab.core.errors import FabricationError
+
+if TYPE_CHECKING:
+    from diefab.made.unfold import Net
+
+__all__ = ["PAGES", "Page", "pack_copies", "parse_page", "shelf"]
+
+#: Page sizes in millimetres (portrait).
+PAGES = {
+    "A5": (148.0, 210.0),
+    "A4": (210.0, 297.0),
+    "A3": (297.0, 420.0),
+    "LETTER": (215.9, 279.4),
+    "LEGAL": (215.9, 355.6),
+}
+_PAGE_NAMES = {"LETTER": "Letter", "LEGAL": "Legal"}
+
+#: Gap between pieces on a page, mm.
+PIECE_GAP = 4.0
+
+
+@dataclass(frozen=True)
+class Page:
+    """A sheet of paper: size and margins in millimetres.
+
+    The footer band (title, legend, calibration bar) sits inside the bottom
+    margin area and is not available to the net.
+    """
+
+    name: str
+    width: float
+    height: float
+    margin: float = 10.0
+    footer: float = 17.0
+
+    @property
+    def printable(self) -> tuple[float, float]:
+        """Width and height available to the net, mm."""
+        return self.width - 2 * self.margin, self.height - 2 * self.margin - self.footer
+
+
+def parse_page(spec: str) -> Page:
+    """``A5``, ``A4``, ``A3``, ``Letter``, ``Legal`` or ``WxH`` in millimetres (e.g. ``200x250``).
+
+    >>> parse_page("letter").width
+    215.9
+    >>> parse_page("150x200").printable
+    (130.0, 163.0)
+    """
+    text = str(spec).strip()
+    key = text.upper()
+    if key in PAGES:
+        w, h = PAGES[key]
+        return Page(_PAGE_NAMES.get(key, key), w, h)
+    m = re.fullmatch(r"(\d+(?:\.\d+)?)\s*[xX×]\s*(\d+(?:\.\d+)?)", text)
+    if not m:
+        raise FabricationError(f"page {spec!r} is not A5, A4, A3, Letter, Legal or WxH in millimetres (e.g. 200x250)")
+    w, h = float(m.group(1)), float(m.group(2))
+    page = Page(f"{w:g}x{h:g}mm", w, h)
+    pw, ph = page.printable
+    if pw < 20 or ph < 20:
+        raise FabricationError(
+            f"page {spec!r} leaves {pw:g}x{ph:g} mm inside its margins and footer; need at least 20x20 mm"
+        )
+    return page
+
+
+def shelf(sizes, printable) -> dict[int, tuple[int, np.ndarray]]:
+    """Shelf packing, tallest first: item index -> (page, offset of its box from the printable corner)."""
+    placement: dict[int, tuple[int, np.ndarray]] = {}
+    page_no, x, y, shelf = 0, 0.0, 0.0, 0.0
+    for k in sorted(range(len(sizes)), key=lambda k: (-sizes[k][1], k)):
+        w, h = sizes[k]
+        if x > 0 and x + w > printable[0] + 1e-9:
+            x, y, shelf = 0.0, y + shelf + PIECE_GAP, 0.0
+        if y > 0 and y + h > printable[1] + 1e-9:
+            page_no, x, y, shelf = page_no + 1, 0.0, 0.0, 0.0
+        placement[k] = (page_no, np.array([x, y]))
+        x, shelf = x + w + PIECE_GAP, max(shelf, h)
+    return placement
+
+
+def pack_copies(net: Net, copies: int) -> tuple[Net, ...]:
+    """`copies` copies of `net`, their pieces packed together onto as few pages as the shelf packer finds.
+
+    Each copy is a :class:`Net` of its own (same faces, tabs and letters,
+    other positions); ``max(n.n_pages for n in result)`` pages in all.
+    """
+    if isinstance(copies, bool) or not isinstance(copies, (int, np.integer)) or copies < 1:
+        raise FabricationError(f"copies={copies!r} must be a whole number >= 1")
+    if copies == 1:
+        return (net,)
+    boxes = []  # (copy, piece, page, lo, size)
+    for c in range(copies):
+        for piece in range(net.n_pieces):
+            members = np.flatnonzero(net.face_piece == piece)
+            pts = np.concatenate(
+                [net.faces[f] for f in members] + [t.polygon for t in net.tabs if net.face_piece[t.face] == piece]
+            )
+            lo = pts.min(axis=0)
+            boxes.append((c, piece, lo, pts.max(axis=0) - lo))
+    placement = shelf([b[3] for b in boxes], net.page.printable)
+    corner = np.array([net.page.margin, net.page.margin])
+    moved: list[dict[int, tuple[int, np.ndarray]]] = [{} for _ in range(copies)]
+    for i, (c, piece, lo, _) in enumerate(boxes):
+        pg, at = placement[i]
+        moved[c][piece] = (pg, corner + at - lo)
+    out = []
+    for c in range(copies):
+        shift = [moved[c][int(p)] for p in net.face_piece]
+        faces = tuple(poly + shift[f][1] for f, poly in enumerate(net.faces))
+        tabs = tuple(replace(t, polygon=t.polygon + shift[t.face][1], page=shift[t.face][0]) for t in net.tabs)
+        out.append(replace(net, faces=faces, face_page=np.array([s[0] for s in shift]), tabs=tabs))
+    return tuple(out)

@@ -1,0 +1,1 @@
+"""Statistics of rolls against a target distribution."""
