@@ -115,3 +115,27 @@ def test_roll_log_round_trips_and_appends(tmp_path):
     rows = read_log(path)
     assert [(r.value, r.face, r.frame) for r in rows] == [(-1, "f3", 10), (None, None, 30)]
     assert path.read_text().splitlines()[0] == "time,value,face,confidence,frame"
+
+
+def test_read_command_logs_one_roll_per_photo_and_refuses_bad_input(tmp_path, capsys):
+    from diefab.cli import main
+
+    design = load_design("d6")
+    layout = marker_layout(design)
+    photos = tmp_path / "photos"
+    photos.mkdir()
+    truth = []
+    for i, rest in enumerate(rendered_rests(design, layout, 4, seed=11, finger=0.0)):
+        cv2.imwrite(str(photos / f"{i:02d}.png"), rest.image)
+        truth.append(rest.value)
+    with pytest.raises(SystemExit) as stop:
+        main(["read", "d6", "--images", str(photos), "--out", str(tmp_path / "out")])
+    assert stop.value.code == 0
+    rows = read_log(tmp_path / "out" / "d6-rolls.csv")
+    assert len(rows) == 4
+    assert all(r.value in (t, None) for r, t in zip(rows, truth))
+    for args in (["--video", str(tmp_path / "missing.avi")], ["--images", str(tmp_path / "out")], []):
+        with pytest.raises(SystemExit) as stop:
+            main(["read", "d6", *args, "--out", str(tmp_path / "out2")])
+        assert stop.value.code == 2
+        assert capsys.readouterr().err.count("\n") == 1
