@@ -139,3 +139,23 @@ def test_read_command_logs_one_roll_per_photo_and_refuses_bad_input(tmp_path, ca
             main(["read", "d6", *args, "--out", str(tmp_path / "out2")])
         assert stop.value.code == 2
         assert capsys.readouterr().err.count("\n") == 1
+
+
+def test_sticker_sheet_carries_every_marker_readable_and_true_to_scale():
+    from diefab.fabricate.pdf import render_png
+    from diefab.fabricate.stickers import sticker_sheets
+
+    design = load_design("fudge-gem")
+    layout = marker_layout(design)
+    sheets = sticker_sheets(design)
+    faces = [f for s in sheets for f in s.faces]
+    assert [name for name, _ in faces] == [design.polyhedron.names[k] for k in layout.faces]
+    # each sticker has its face's area, in mm²
+    areas = design.polyhedron.areas * design.mm_per_unit**2
+    for name, ring in faces:
+        x, y = ring[:, 0], ring[:, 1]
+        area = 0.5 * abs(np.dot(x, np.roll(y, 1)) - np.dot(y, np.roll(x, 1)))
+        assert area == pytest.approx(areas[design.polyhedron.face_index(name)], rel=1e-9)
+    image = cv2.imdecode(np.frombuffer(render_png(sheets), np.uint8), cv2.IMREAD_GRAYSCALE)
+    ids, _ = MarkerDetector(layout).detect(image)
+    assert sorted(ids.tolist()) == sorted(layout.ids.tolist())

@@ -17,6 +17,7 @@ import click
 
 from diefab.cli.calibrate import calibrate
 from diefab.cli.design import design
+from diefab.cli.markers import markers
 from diefab.cli.net import net
 from diefab.cli.optimize import optimize
 from diefab.cli.predict import predict, templates
@@ -35,7 +36,7 @@ def cli() -> None:
     """Design, simulate and fabricate dice with unequal face probabilities."""
 
 
-for _command in (templates, predict, stats, design, optimize, validate, calibrate, net, stl, read):
+for _command in (templates, predict, stats, design, optimize, validate, calibrate, net, stl, read, markers):
     cli.add_command(_command)
 
 
