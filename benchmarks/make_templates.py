@@ -70,8 +70,19 @@ def make(name: str, target: str) -> dict:
     v = report["validated"]
     return {
         "target": target,
-        "command": " ".join(["python -m diefab design", target, "--seed", str(SEED), "--validate-sims", str(DROPS),
-                             "--name", name, *OPTIONS.get(name, [])]),
+        "command": " ".join(
+            [
+                "python -m diefab design",
+                target,
+                "--seed",
+                str(SEED),
+                "--validate-sims",
+                str(DROPS),
+                "--name",
+                name,
+                *OPTIONS.get(name, []),
+            ]
+        ),
         "exit": done.returncode,
         "family": report["family"],
         "faces": len(report["values"]),

@@ -17,9 +17,11 @@ import click
 
 from diefab.cli.calibrate import calibrate
 from diefab.cli.design import design
+from diefab.cli.markers import markers
 from diefab.cli.net import net
 from diefab.cli.optimize import optimize
 from diefab.cli.predict import predict, templates
+from diefab.cli.read import read
 from diefab.cli.roll import roll
 from diefab.cli.stats import stats
 from diefab.cli.stl import stl
@@ -36,7 +38,21 @@ def cli() -> None:
     """Design, simulate and fabricate dice with unequal face probabilities."""
 
 
-for _command in (templates, predict, stats, design, optimize, validate, calibrate, net, stl, roll, studio):
+for _command in (
+    templates,
+    predict,
+    stats,
+    design,
+    optimize,
+    validate,
+    calibrate,
+    net,
+    stl,
+    markers,
+    read,
+    roll,
+    studio,
+):
     cli.add_command(_command)
 
 

@@ -454,8 +454,11 @@ def synthesize(
         _refine(out, target, min_margin, run, min(REFINE_GOAL, tolerance), throws)
         run.max_drops += reserve
     out.nearest, out.capped, out.drops = nearest, run.capped, run.used
-    shaped = out.simulated_tvd if out.simulated_tvd is not None else float(tvd(out.predicted,
-                                                                               target.aligned(out.design.support)))
+    shaped = (
+        out.simulated_tvd
+        if out.simulated_tvd is not None
+        else float(tvd(out.predicted, target.aligned(out.design.support)))
+    )
     if nearest is not None and float(nearest.tvd) < shaped:
         say(f"the nearest counted die (TVD {float(nearest.tvd):.4f}) is nearer the target than the shaped die "
             f"({shaped:.4f})")  # fmt: skip
@@ -546,7 +549,13 @@ def _counted_design(
 
 
 def _fair_design(
-    cand: Candidate | None, target: Target, name: str, fill: Fill, size_mm: float, model: str, say,
+    cand: Candidate | None,
+    target: Target,
+    name: str,
+    fill: Fill,
+    size_mm: float,
+    model: str,
+    say,
     counts: np.ndarray | None = None,
 ) -> Synthesis | None:
     """The fair die of `cand` with its faces counted out to `target` (or by `counts`), or None if unreadable."""

@@ -1,0 +1,250 @@
+"""Reading rolls from a stream of frames: motion, markers, pose, settle.
+
+:class:`RollReader` takes grayscale frames one by one.  Each frame is first
+compared with the last one at 1/8 scale (cheap, and blind to a uniform change
+of light); a frame that moved resets the settle window and is not searched
+for markers at all, since a die in motion is never read.  A still frame is
+searched near where the die was last seen or last moved (then, failing that,
+everywhere), its pose solved and read (:func:`~.pose.read_frame`), and the
+:class:`~.settle.Settler` says when a roll is over.  Once a settle is
+counted, frames are not read again until something moves.
+
+:func:`frames` yields the frames of a camera, a video file or a folder of
+images; bad input raises :class:`~.pose.MarkerError` or
+:class:`~diefab.core.errors.DiefabError` subclasses with one-line messages.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from diefab.camera.pose import (
+    DEFAULT_FOV,
+    MIN_CONFIDENCE,
+    Camera,
+    FrameRead,
+    MarkerDetector,
+    MarkerError,
+    layout_of,
+    read_frame,
+)
+from diefab.camera.settle import Roll, Settler
+from diefab.core.errors import DiefabError
+from diefab.dice.design import Design
+
+__all__ = ["IMAGE_SUFFIXES", "RollReader", "SourceError", "frames"]
+
+#: Image files read from a folder, in name order.
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
+#: Motion is measured on the frame shrunk by this factor.
+MOTION_SCALE = 8
+#: A shrunk pixel changed when it differs by more than this fraction of the frame's mean brightness ...
+MOTION_LEVEL = 0.12
+#: ... and the frame moved when at least this many shrunk pixels changed.
+MOTION_PIXELS = 6
+#: Frames with markers of other dictionaries only, and none of the die's, before the reader gives up.
+FOREIGN_FRAMES = 10
+
+
+class SourceError(DiefabError, OSError):
+    """A camera, video or image folder cannot be read."""
+
+
+@dataclass
+class _Motion:
+    previous: np.ndarray | None = None
+    box: tuple[int, int, int, int] | None = None  # where the last motion was, full-frame pixels
+
+    def update(self, gray: np.ndarray) -> bool:
+        import cv2
+
+        h, w = gray.shape
+        small = cv2.resize(gray, (w // MOTION_SCALE, h // MOTION_SCALE), interpolation=cv2.INTER_AREA).astype(
+            np.float32
+        )
+        small /= max(float(small.mean()), 1.0)
+        prev, self.previous = self.previous, small
+        if prev is None or prev.shape != small.shape:
+            return True
+        changed = np.abs(small - prev) > MOTION_LEVEL
+        if int(changed.sum()) < MOTION_PIXELS:
+            return False
+        ys, xs = np.nonzero(changed)
+        s = MOTION_SCALE
+        self.box = (int(xs.min()) * s, int(ys.min()) * s, (int(xs.max()) + 1) * s, (int(ys.max()) + 1) * s)
+        return True
+
+
+class RollReader:
+    """Turns frames into rolls for one design.
+
+    Parameters
+    ----------
+    design : Design
+    camera : Camera or None
+        None: an uncalibrated camera of the first frame's size and :data:`~.pose.DEFAULT_FOV`.
+    settle : int
+        Still frames before a roll counts.
+    min_confidence : float
+        Frames read below this are unread.
+    down : (3,) float
+        Straight down in camera coordinates (+z: the camera looks straight down).
+    """
+
+    def __init__(
+        self,
+        design: Design,
+        camera: Camera | None = None,
+        *,
+        settle: int = 8,
+        min_confidence: float = MIN_CONFIDENCE,
+        fov: float = DEFAULT_FOV,
+        down=(0.0, 0.0, 1.0),
+    ) -> None:
+        if not 0 <= min_confidence <= 1:
+            raise DiefabError(f"min confidence {min_confidence} must be in [0, 1]")
+        if settle < 1:
+            raise DiefabError(f"settle {settle} must be at least 1 frame")
+        self.design = design
+        self.layout = layout_of(design)
+        self.detector = MarkerDetector(self.layout)
+        self.camera, self.fov = camera, fov
+        self.min_confidence = min_confidence
+        self.down = np.asarray(down, dtype=float)
+        self.size_mm = float(np.ptp(design.polyhedron.vertices, axis=0).max()) * design.mm_per_unit
+        self.settler = Settler(settle, self.size_mm)
+        self.motion = _Motion()
+        self.box: tuple[int, int, int, int] | None = None
+        self.frame = -1
+        self.last: FrameRead | None = None
+        self.detections = 0
+        self._foreign = 0
+
+    def _roi(self, shape) -> tuple[int, int, int, int] | None:
+        box = self.box or self.motion.box
+        if box is None:
+            return None
+        h, w = shape
+        x0, y0, x1, y1 = box
+        pad = max(x1 - x0, y1 - y0, 48)
+        return max(0, x0 - pad), max(0, y0 - pad), min(w, x1 + pad), min(h, y1 + pad)
+
+    def read(self, gray: np.ndarray) -> FrameRead:
+        """Read one frame without the settle logic (near the die's last place first, then everywhere)."""
+        if self.camera is None:
+            h, w = gray.shape
+            self.camera = Camera.from_fov(w, h, self.fov)
+        kwargs = dict(min_confidence=self.min_confidence, down=self.down)
+        roi = self._roi(gray.shape)
+        read = read_frame(gray, self.design, self.detector, self.camera, roi=roi, **kwargs) if roi else None
+        if read is None or read.pose is None:
+            read = read_frame(gray, self.design, self.detector, self.camera, **kwargs)
+        if read.box is not None:
+            self.box = read.box
+        self.detections += read.pose is not None
+        if read.pose is None and not self.detections:
+            self._check_foreign(gray, read)
+        return read
+
+    def _check_foreign(self, gray: np.ndarray, read: FrameRead) -> None:
+        if read.detected:
+            self._foreign += 1  # markers of the die's dictionary that are not on the die
+            where = "markers that are not on this die"
+        else:
+            other = self.detector.foreign(gray) if self.frame % 15 == 0 else None
+            if other is None:
+                return
+            self._foreign += 5
+            where = f"markers of {other}; design {self.design.name!r} uses {self.layout.dictionary}"
+        if self._foreign >= FOREIGN_FRAMES:
+            raise MarkerError(f"the camera sees {where}: is this the die of design {self.design.name!r}?")
+
+    def feed(self, gray: np.ndarray) -> tuple[FrameRead | None, Roll | None]:
+        """Take the next frame ((h, w) uint8); return what it shows (None: not read) and the roll it ends."""
+        if gray.ndim != 2:
+            raise DiefabError(f"frames must be grayscale (h, w), got shape {gray.shape}")
+        self.frame += 1
+        moving = self.motion.update(gray)
+        if moving:
+            self.settler.feed(self.frame, FrameRead(None, None, None, 0.0), moving=True)
+            return None, None
+        if not self.settler.needs_reading:
+            return None, None
+        read = self.read(gray)
+        self.last = read
+        return read, self.settler.feed(self.frame, read, moving=False)
+
+    def feed_rest(self, gray: np.ndarray) -> tuple[FrameRead, Roll]:
+        """Read a photo of the die at rest (no motion or settle): one roll per photo, unread when unsure."""
+        self.frame += 1
+        self.box = None  # each photo is its own scene
+        read = self.read(gray)
+        self.last = read
+        return read, Roll(self.frame, read.value, read.face, read.confidence)
+
+
+def frames(
+    *, camera: int | None = None, video: str | Path | None = None, images: str | Path | None = None
+) -> Iterator[tuple[float, np.ndarray]]:
+    """(time in seconds, grayscale frame) from exactly one source.
+
+    A camera's time is the wall clock since the first frame, a video's its
+    timestamps, a folder's the image's index.
+
+    Raises
+    ------
+    SourceError
+        No such camera, a video that cannot be read, a folder without images.
+    """
+    import cv2
+
+    try:  # a camera that cannot be opened is reported in one line, not in OpenCV's warnings too
+        cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
+    except AttributeError:
+        pass
+    if sum(x is not None for x in (camera, video, images)) != 1:
+        raise SourceError("give exactly one source: a camera, a video file or a folder of images")
+    if images is not None:
+        folder = Path(images)
+        if not folder.is_dir():
+            raise SourceError(f"image folder {folder} {'is not a folder' if folder.exists() else 'does not exist'}")
+        files = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+        if not files:
+            raise SourceError(f"image folder {folder} holds no image ({', '.join(IMAGE_SUFFIXES)})")
+        for i, path in enumerate(files):
+            image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+            if image is None:
+                raise SourceError(f"cannot read image {path}")
+            yield float(i), image
+        return
+    if video is not None:
+        path = Path(video)
+        if not path.is_file():
+            raise SourceError(f"video {path} {'is not a regular file' if path.exists() else 'does not exist'}")
+        capture = cv2.VideoCapture(str(path))
+    else:
+        capture = cv2.VideoCapture(int(camera))
+    try:
+        if not capture.isOpened():
+            raise SourceError(f"cannot open {'video ' + str(video) if video is not None else f'camera {camera}'}")
+        import time
+
+        start = time.monotonic()
+        first = True
+        while True:
+            ok, image = capture.read()
+            if not ok:
+                if first:
+                    raise SourceError(
+                        f"{'video ' + str(video) if video is not None else f'camera {camera}'} gives no frame"
+                    )
+                return
+            first = False
+            t = capture.get(cv2.CAP_PROP_POS_MSEC) / 1000 if video is not None else time.monotonic() - start
+            yield t, cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image
+    finally:
+        capture.release()

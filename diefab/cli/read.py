@@ -1,0 +1,128 @@
+"""``diefab read``: count real rolls of a marked die with a camera, a video or a folder of images."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from diefab.cli.common import design_argument, get_design, out_option
+
+
+@click.command("read")
+@design_argument
+@click.option(
+    "--camera", "camera_index", type=click.IntRange(0, 99), default=None, help="Camera number (0: the first)."
+)
+@click.option("--video", type=click.Path(path_type=Path), default=None, help="Video file to read.")
+@click.option("--images", type=click.Path(path_type=Path), default=None, help="Folder of images, read in name order.")
+@click.option("--name", default=None, help="Roll log name (default: the design's): OUT/NAME-rolls.csv.")
+@click.option("--settle", type=click.IntRange(1, 1000), default=8, show_default=True,
+              help="Still frames before a roll counts (a folder of images: each image is one rest).")  # fmt: skip
+@click.option("--min-confidence", type=click.FloatRange(0, 1), default=0.5, show_default=True,
+              help="Frames read with less confidence are unread.")  # fmt: skip
+@click.option("--fov", type=click.FloatRange(10, 170), default=65.0, show_default=True,
+              help="The camera's horizontal field of view, degrees.")  # fmt: skip
+@click.option("--show", is_flag=True, help="Show the frame with the detection drawn (a window, or OUT/NAME-live.png).")
+@out_option
+def read(design, params, camera_index, video, images, name, settle, min_confidence, fov, show, out_dir) -> None:
+    """Read rolls of DESIGN's marked die and append them to a roll log.
+
+    Put the camera above the table, looking straight down.  A roll counts
+    once the die has been still for --settle frames; a die in motion, a hand
+    over it or a pose that does not clearly show one face is logged unread
+    (an empty value), never guessed.  The log (time,value,face,confidence,frame)
+    is rewritten atomically after every roll; run again to resume it.
+    """
+    from filelock import FileLock, Timeout
+
+    from diefab.camera.log import read_log
+    from diefab.camera.reader import RollReader, frames
+    from diefab.core.errors import OutputError
+    from diefab.core.files import ensure_dir, output_path
+
+    if sum(x is not None for x in (camera_index, video, images)) != 1:
+        raise click.UsageError("give exactly one of --camera, --video and --images")
+    d = get_design(design, params)
+    reader = RollReader(d, settle=settle, min_confidence=min_confidence, fov=fov)
+    ensure_dir(out_dir)
+    log = output_path(out_dir, name or d.name, "-rolls.csv")
+    lock = FileLock(str(log) + ".lock")
+    try:
+        lock.acquire(timeout=0)
+    except Timeout:
+        raise OutputError(f"another diefab read is writing {log}") from None
+    try:
+        rows = read_log(log)
+        source = frames(camera=camera_index, video=video, images=images)
+        _run(d, reader, source, log, rows, show, out_dir, name, photos=images is not None)
+    finally:
+        lock.release()
+
+
+def _run(d, reader, source, log, rows, show, out_dir, name, photos: bool) -> None:
+    from rich.live import Live
+
+    from diefab.camera.log import LogRow, append_roll
+    from diefab.cli.common import console
+
+    offset = max((r.frame for r in rows), default=-1) + 1
+    with Live(_table(d, rows, reader), console=console(), refresh_per_second=4, transient=False) as live:
+        for t, gray in source:
+            seen, roll = reader.feed_rest(gray) if photos else reader.feed(gray)
+            if show and seen is not None:
+                _show(d, reader, gray, seen, out_dir, name)
+            if roll is None:
+                continue
+            face = None if roll.face is None else d.polyhedron.names[roll.face]
+            row = LogRow(t, roll.value, face, roll.confidence, offset + roll.frame)
+            append_roll(log, [row], existing=rows)
+            rows.append(row)
+            live.update(_table(d, rows, reader))
+        live.update(_table(d, rows, reader))
+    if not rows:
+        click.echo(f"no roll read; log {log} not written", err=True)
+    else:
+        click.echo(f"wrote {log}")
+
+
+def _table(d, rows, reader):
+    from rich.table import Table
+
+    from diefab.dice.design import format_value
+
+    signed = min(d.support) < 0
+    counts = {v: 0 for v in d.support}
+    unread = 0
+    for r in rows:
+        if r.value is None:
+            unread += 1
+        elif r.value in counts:
+            counts[r.value] += 1
+    read = sum(counts.values())
+    target = d.target_distribution
+    table = Table(title=f"{d.name}: {read} rolls read, {unread} unread (frame {reader.frame + 1})")
+    table.add_column("value", justify="right")
+    table.add_column("count", justify="right")
+    table.add_column("share", justify="right")
+    table.add_column("target", justify="right")
+    for v, p in zip(d.support, target.probabilities):
+        share = counts[v] / read if read else 0.0
+        table.add_row(format_value(v, signed), str(counts[v]), f"{share:.3f}", f"{p:.3f}")
+    return table
+
+
+def _show(d, reader, gray, seen, out_dir, name) -> None:
+    import cv2
+
+    from diefab.camera.render import draw_detection
+    from diefab.core.files import atomic_write, output_path
+
+    image = draw_detection(gray, seen, d, reader.layout, reader.camera)
+    try:
+        cv2.imshow("diefab read", image)
+        cv2.waitKey(1)
+    except cv2.error:  # a headless OpenCV has no window: keep the latest frame in a file
+        ok, data = cv2.imencode(".png", image)
+        if ok:
+            atomic_write(output_path(out_dir, name or d.name, "-live.png"), data.tobytes())
