@@ -10,12 +10,12 @@ if not hasattr(cv2, "aruco"):
     pytest.skip("OpenCV without the aruco module", allow_module_level=True)
 
 from diefab import load_design  # noqa: E402
-from diefab.camera.log import LogRow, append_roll, read_log  # noqa: E402
 from diefab.camera.pose import Camera, FrameRead, MarkerDetector, read_frame, read_pose, solve_pose  # noqa: E402
 from diefab.camera.render import View, render, rest_pose  # noqa: E402
 from diefab.camera.rig import rendered_rests, roll_video  # noqa: E402
 from diefab.camera.settle import Settler  # noqa: E402
 from diefab.dice.markers import marker_layout  # noqa: E402
+from diefab.stats.rolllog import Roll, append_roll, read_log  # noqa: E402
 
 
 @pytest.mark.parametrize("name", ["d6", "d20", "fudge-gem"])
@@ -110,10 +110,11 @@ def test_settler_counts_once_per_settle_and_never_guesses():
 
 def test_roll_log_round_trips_and_appends(tmp_path):
     path = tmp_path / "rolls.csv"
-    append_roll(path, [LogRow(0.5, -1, "f3", 0.9, 10)])
-    append_roll(path, [LogRow(1.25, None, None, 0.2, 30)])
-    rows = read_log(path)
-    assert [(r.value, r.face, r.frame) for r in rows] == [(-1, "f3", 10), (None, None, 30)]
+    append_roll(path, Roll("0.500", -1, "f3", 0.9, 10))
+    append_roll(path, Roll("1.250", None, None, 0.2, 30))
+    log = read_log(path)
+    assert [(r.value, r.face, r.frame) for r in log.rolls] == [(-1, "f3", 10), (None, None, 30)]
+    assert log.values.tolist() == [-1] and log.unread == 1  # an unread roll is kept, never counted
     assert path.read_text().splitlines()[0] == "time,value,face,confidence,frame"
 
 
@@ -131,7 +132,7 @@ def test_read_command_logs_one_roll_per_photo_and_refuses_bad_input(tmp_path, ca
     with pytest.raises(SystemExit) as stop:
         main(["read", "d6", "--images", str(photos), "--out", str(tmp_path / "out")])
     assert stop.value.code == 0
-    rows = read_log(tmp_path / "out" / "d6-rolls.csv")
+    rows = read_log(tmp_path / "out" / "d6-rolls.csv").rolls
     assert len(rows) == 4
     assert all(r.value in (t, None) for r, t in zip(rows, truth))
     for args in (["--video", str(tmp_path / "missing.avi")], ["--images", str(tmp_path / "out")], []):
@@ -159,3 +160,17 @@ def test_sticker_sheet_carries_every_marker_readable_and_true_to_scale():
     image = cv2.imdecode(np.frombuffer(render_png(sheets), np.uint8), cv2.IMREAD_GRAYSCALE)
     ids, _ = MarkerDetector(layout).detect(image)
     assert sorted(ids.tolist()) == sorted(layout.ids.tolist())
+
+
+def test_stats_reads_a_camera_log_and_leaves_unread_rolls_out(tmp_path, capsys):
+    from diefab.cli import main
+
+    path = tmp_path / "d6-rolls.csv"
+    for k, value in enumerate([1, 2, None, 3, 4, 5, 6]):
+        append_roll(path, Roll(f"{k:.3f}", value, None if value is None else f"f{value}", 0.9, k))
+    with pytest.raises(SystemExit) as stop:
+        main(["stats", "--rolls", str(path), "--target", "1d6", "--json"])
+    assert stop.value.code == 0
+    import json
+
+    assert json.loads(capsys.readouterr().out)["n"] == 6

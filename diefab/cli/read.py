@@ -32,14 +32,14 @@ def read(design, params, camera_index, video, images, name, settle, min_confiden
     once the die has been still for --settle frames; a die in motion, a hand
     over it or a pose that does not clearly show one face is logged unread
     (an empty value), never guessed.  The log (time,value,face,confidence,frame)
-    is rewritten atomically after every roll; run again to resume it.
+    gets one line per roll, written durably; run again to resume it.
     """
     from filelock import FileLock, Timeout
 
-    from diefab.camera.log import read_log
     from diefab.camera.reader import RollReader, frames
     from diefab.core.errors import OutputError
     from diefab.core.files import ensure_dir, output_path
+    from diefab.stats.rolllog import read_log
 
     if sum(x is not None for x in (camera_index, video, images)) != 1:
         raise click.UsageError("give exactly one of --camera, --video and --images")
@@ -53,7 +53,7 @@ def read(design, params, camera_index, video, images, name, settle, min_confiden
     except Timeout:
         raise OutputError(f"another diefab read is writing {log}") from None
     try:
-        rows = read_log(log)
+        rows = list(read_log(log).rolls) if log.exists() else []
         source = frames(camera=camera_index, video=video, images=images)
         _run(d, reader, source, log, rows, show, out_dir, name, photos=images is not None)
     finally:
@@ -63,10 +63,10 @@ def read(design, params, camera_index, video, images, name, settle, min_confiden
 def _run(d, reader, source, log, rows, show, out_dir, name, photos: bool) -> None:
     from rich.live import Live
 
-    from diefab.camera.log import LogRow, append_roll
     from diefab.cli.common import console
+    from diefab.stats.rolllog import Roll, append_roll
 
-    offset = max((r.frame for r in rows), default=-1) + 1
+    offset = max((r.frame for r in rows if r.frame is not None), default=-1) + 1
     with Live(_table(d, rows, reader), console=console(), refresh_per_second=4, transient=False) as live:
         for t, gray in source:
             seen, roll = reader.feed_rest(gray) if photos else reader.feed(gray)
@@ -75,8 +75,8 @@ def _run(d, reader, source, log, rows, show, out_dir, name, photos: bool) -> Non
             if roll is None:
                 continue
             face = None if roll.face is None else d.polyhedron.names[roll.face]
-            row = LogRow(t, roll.value, face, roll.confidence, offset + roll.frame)
-            append_roll(log, [row], existing=rows)
+            row = Roll(f"{t:.3f}", roll.value, face, round(float(roll.confidence), 4), offset + roll.frame)
+            append_roll(log, row)
             rows.append(row)
             live.update(_table(d, rows, reader))
         live.update(_table(d, rows, reader))

@@ -7,9 +7,12 @@ The format, shared by the camera reader and the hand tally::
     2026-05-01T18:03:14.020Z,2,,,
 
 ``time``
-    UTC, ISO 8601 with milliseconds and a ``Z``.
+    UTC, ISO 8601 with milliseconds and a ``Z`` (a hand tally), or seconds
+    into the video (a camera reader).
 ``value``
-    The value rolled (``-1``, ``+2`` and ``−3`` with a true minus are read).
+    The value rolled (``-1``, ``+2`` and ``−3`` with a true minus are read);
+    empty for a roll a machine reader saw but could not read (an unread
+    roll: kept in the log, never counted).
 ``face``
     The resting face (``f3``), empty for a hand tally.
 ``confidence``
@@ -74,9 +77,9 @@ class Roll:
     Attributes
     ----------
     time : str
-        UTC time, ISO 8601 (``2026-05-01T18:03:11.250Z``).
-    value : int
-        The value rolled.
+        UTC time, ISO 8601 (``2026-05-01T18:03:11.250Z``), or seconds into a video.
+    value : int or None
+        The value rolled; None: seen but not read.
     face : str or None
         Resting face name (``f3``), if known.
     confidence : float or None
@@ -86,7 +89,7 @@ class Roll:
     """
 
     time: str
-    value: int
+    value: int | None
     face: str | None = None
     confidence: float | None = None
     frame: int | None = None
@@ -95,7 +98,7 @@ class Roll:
     def now(cls, value: int, face: str | None = None, confidence: float | None = None, frame: int | None = None):
         """A roll stamped with the current UTC time."""
         stamp = datetime.now(UTC).isoformat(timespec="milliseconds").replace("+00:00", "Z")
-        return cls(stamp, int(value), face, confidence, frame)
+        return cls(stamp, None if value is None else int(value), face, confidence, frame)
 
     def line(self) -> str:
         """The roll as one CSV line, newline included."""
@@ -105,7 +108,7 @@ class Roll:
             raise StatsError(f"confidence={self.confidence!r} is outside [0, 1]")
         cells = [
             self.time,
-            str(int(self.value)),
+            "" if self.value is None else str(int(self.value)),
             self.face or "",
             "" if self.confidence is None else f"{self.confidence:.4f}",
             "" if self.frame is None else str(int(self.frame)),
@@ -131,8 +134,13 @@ class RollLog:
 
     @property
     def values(self) -> np.ndarray:
-        """(n,) int64 values in the order rolled."""
-        return np.array([r.value for r in self.rolls], dtype=np.int64)
+        """(n,) int64 values read, in the order rolled (unread rolls left out)."""
+        return np.array([r.value for r in self.rolls if r.value is not None], dtype=np.int64)
+
+    @property
+    def unread(self) -> int:
+        """Rolls seen but not read."""
+        return sum(r.value is None for r in self.rolls)
 
     def __len__(self) -> int:
         return len(self.rolls)
@@ -209,7 +217,7 @@ def read_log(path: str | Path) -> RollLog:
         rolls.append(
             Roll(
                 stamp.strip(),
-                parse_value(value, where),
+                None if not value.strip() else parse_value(value, where),
                 face.strip() or None,
                 _cell(confidence, where, "confidence", float),
                 _cell(frame, where, "frame", int),
