@@ -906,21 +906,21 @@ class _FillingFile:
 
 
 def test_a_full_disk_mid_run_keeps_the_log_and_says_how_to_resume(tmp_path, bad, run, monkeypatch):
-    from diefab.search import simopt
+    from diefab.search import runlog
 
-    real = simopt.RunLog.append
+    real = runlog.RunLog.append
 
     def filling(self, record):
         if record["i"] == 2:  # the disk fills in the middle of the third line
             self._fh = _FillingFile(self._fh)
         return real(self, record)
 
-    monkeypatch.setattr(simopt.RunLog, "append", filling)
+    monkeypatch.setattr(runlog.RunLog, "append", filling)
     args = ["calibrate", *DIE, "--free", "restitution", "--sims-per-eval", "20", "--workers", "1", "--name", "c"]
     line = bad(*args, "--max-evals", "5", "--out", tmp_path)
     assert "No space left on device" in line and f"resume with: diefab calibrate --resume {tmp_path / 'c'}" in line
     assert (tmp_path / "c" / "evaluations.jsonl").read_text().count("\n") == 2  # no torn third line
-    monkeypatch.setattr(simopt.RunLog, "append", real)
+    monkeypatch.setattr(runlog.RunLog, "append", real)
     code, out, err = run("calibrate", "--resume", tmp_path / "c", "--max-evals", "5", "--workers", "1", "--json")
     assert code == 0 and not err, err
     assert json.loads(out)["replayed"] == 2 and json.loads(out)["evaluations"] == 5

@@ -10,7 +10,8 @@ import pytest
 from diefab.cli import main
 from diefab.dice.design import design_to_toml, load_design
 from diefab.physics.simulate import PhysicsSettings
-from diefab.search.simopt import RunError, RunLog, RunSpec, noise_floor, optimize_by_simulation, start_point
+from diefab.search.runlog import RunLog
+from diefab.search.simopt import RunError, RunSpec, noise_floor, optimize_by_simulation, start_point
 
 
 def _spec(**kw) -> RunSpec:

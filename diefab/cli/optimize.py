@@ -207,7 +207,8 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
     from diefab.dice.design import design_to_toml
     from diefab.dice.families import family
     from diefab.search.runid import pinned_toml
-    from diefab.search.simopt import RunError, RunLog, RunSpec, best_design, optimize_by_simulation, start_point
+    from diefab.search.runlog import RunLog
+    from diefab.search.simopt import RunError, RunSpec, best_design, optimize_by_simulation, start_point
 
     if not (np.isfinite(budget) and budget > 0):
         raise click.BadParameter(f"{budget} must be a positive number of minutes", param_hint="--budget")

@@ -48,7 +48,8 @@ import numpy as np
 from diefab.core.errors import DiefabError, PhysicsError, StatsError
 from diefab.dice.design import Design
 from diefab.physics.simulate import MAX_DROPS
-from diefab.search.simopt import RUN_FORMAT, RunError, RunLog, check_budget
+from diefab.search.runlog import RunLog
+from diefab.search.simopt import RUN_FORMAT, RunError, check_budget
 
 __all__ = [
     "DEFAULT_FREE",
