@@ -78,18 +78,9 @@ from diefab.core.errors import DiefabError
 from diefab.dice.design import design_to_toml
 from diefab.physics.realrolls import grouped_tvd as grouped
 from diefab.physics.simulate import shutdown_pool
-from diefab.search.calibrate import (
-    RealDie,
-    deviance,
-    fit_settings,
-    fit_surface,
-    make_spec,
-    prior_penalty,
-    realrolls_die,
-    simulate_die,
-    smoothed,
-)
+from diefab.search.calibrate import RealDie, deviance, make_spec, realrolls_die, simulate_die, smoothed
 from diefab.search.fidelity import paper_die
+from diefab.search.surface import fit_settings, fit_surface, prior_penalty
 
 HERE = Path(__file__).parent
 FREE = ("restitution", "friction", "rolling_friction", "spin", "drop_height", "capture")

@@ -350,7 +350,7 @@ def test_realrolls_die_keeps_counts_groups_and_references():
 
 def _true_surface(d: int = 2):
     """A known 3-value surface, quadratic in the logits, and its probabilities."""
-    from diefab.search.calibrate import ResponseSurface, quadratic_features
+    from diefab.search.surface import ResponseSurface, quadratic_features
 
     rng = np.random.default_rng(3)
     coef = np.zeros((quadratic_features(np.zeros((1, d))).shape[1], 3))
@@ -359,7 +359,7 @@ def _true_surface(d: int = 2):
 
 
 def test_surface_recovers_a_quadratic_logit_from_multinomial_counts():
-    from diefab.search.calibrate import fit_surface
+    from diefab.search.surface import fit_surface
 
     truth = _true_surface()
     rng = np.random.default_rng(0)
@@ -375,7 +375,7 @@ def test_surface_recovers_a_quadratic_logit_from_multinomial_counts():
 
 
 def test_surface_keeps_a_value_never_simulated_possible():
-    from diefab.search.calibrate import fit_surface
+    from diefab.search.surface import fit_surface
 
     xs = np.linspace(0, 1, 6)[:, None]
     counts = np.c_[np.full(6, 50), np.full(6, 50), np.zeros(6)]
@@ -386,7 +386,8 @@ def test_surface_keeps_a_value_never_simulated_possible():
 
 def test_fit_settings_finds_the_setting_that_made_the_rolls_and_the_prior_pulls_toward_the_start():
     from diefab.dice.design import load_design
-    from diefab.search.calibrate import RealDie, ResponseSurface, fit_settings, quadratic_features
+    from diefab.search.calibrate import RealDie
+    from diefab.search.surface import ResponseSurface, fit_settings, quadratic_features
 
     cube = load_design("d6")  # six values
     rng = np.random.default_rng(5)
