@@ -22,14 +22,14 @@ Calibration, affordable on a shared 2-core machine:
    common random numbers (one seed; ``--drops`` drops per die and candidate,
    ``--slow-drops`` for dice of more than 50 hull faces, whose drops cost
    several times more).
-2. Per die, a response surface (:func:`diefab.search.calibrate.fit_surface`, a
+2. Per die, a response surface (:func:`diefab.search.surface.fit_surface`, a
    multinomial logistic regression quadratic in the settings) pools all
    candidates' counts into smooth value probabilities over the whole box.
 3. For each held-out die the calibrated setting minimizes the deviance of
    the *other* dice's real counts under their surfaces plus a normal prior
    toward the default physics (``--prior`` standard deviations, in units of
    each parameter's range; fixed before any result was seen)
-   (:func:`diefab.search.calibrate.fit_settings`).  Pooled, the fit uses every
+   (:func:`diefab.search.surface.fit_settings`).  Pooled, the fit uses every
    other die; *by material* only the other dice of the held-out die's
    material (:data:`MATERIAL`: what it is made of and what it was rolled
    on), and a die whose material no other die shares gets the defaults:
