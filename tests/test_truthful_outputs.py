@@ -128,8 +128,9 @@ def test_a_bad_roll_is_named_with_its_line(tmp_path, bad):
 
 def test_design_report_is_one_offline_page(run, tmp_path):
     page = tmp_path / "u6.html"
-    code, out, err = run("design", "uniform:6", "--model", "fast", "--validate-sims", "200", "--report", page,
-                         "--out", tmp_path)  # fmt: skip
+    # 200 drops cannot show TVD 0.02: a wide tolerance, so the report (not the verdict) is what is tested
+    code, out, err = run("design", "uniform:6", "--model", "fast", "--validate-sims", "200", "--tolerance", "0.5",
+                         "--report", page, "--out", tmp_path)  # fmt: skip
     assert code == 0, err
     links = _Links()
     links.feed(page.read_text(encoding="utf-8"))
