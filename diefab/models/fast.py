@@ -1,59 +1,20 @@
 """A fast landing model calibrated against the physics validator.
 
-The solid-angle model (the paper's) says where the die first touches down:
-the face hit by the downward ray from the centre of mass.  A real die then
-bounces and rolls, and leaves a face more easily the less its centre of mass
-must rise to tip over an edge.  This model adds those two effects:
-
-1. **Quasi-static toppling.**  A face whose stability margin is negative
-   cannot hold the die: its solid-angle share flows, edge by edge, to the
-   face it topples onto (across the edge that the centre of mass projects
-   furthest beyond), down the gravity-descent graph until a stable face.
-2. **Energy-barrier tumbling.**  From a stable face *f* the die tips over
-   edge *e* onto its neighbour *g* at rate
-
-   ``k_fe = theta_fe / (2 pi) * exp(-B_fe / T) * (A_g / A_f) ** AREA_POWER * eta_e ** ROLL_POWER``,
-
-   where ``B_fe = dist(center, edge line) - dist(center, plane of f)`` is the
-   height the centre of mass must rise to tip over *e*, ``theta_fe`` is the
-   angle the edge subtends at the foot of the centre of mass in *f* (the
-   share of horizontal directions that lead over that edge) and A are face
-   areas (a larger face catches a tipping die more easily).  ``eta_e`` is
-   the share of kinetic energy a die keeps when it rolls over *e*: in the
-   plastic impact that ends the roll, angular momentum about the new contact
-   line is conserved, so the spin drops by the factor
-   ``(k_e**2 + r_e**2 cos phi_e) / (k_e**2 + r_e**2)`` (the rolling-polygon
-   impact law), ``eta_e`` its square, with ``phi_e`` the turn between the
-   two faces (angle between their normals), ``r_e`` the distance from the
-   centre of mass to the edge line and ``k_e`` the radius of gyration about
-   the axis through the centre of mass parallel to *e* (uniform solid).
-   Edges that keep the energy (shallow turns, long lever arms) are crossed
-   by rolling as well as by thermal hops.  ``eta_e`` is the same from both
-   sides of the edge.  The landing
-   distribution is the first-contact distribution carried by this chain for
-   a time ``TAU``, ``p0 expm(TAU Q)``,
-3. **weighted by rest height**: times ``exp(-HEIGHT_WEIGHT * h_f)`` (h_f the
-   height of the centre of mass resting on f, above the lowest rest), and
-   normalized.
-
-Five constants, :data:`TEMPERATURE`, :data:`TAU`, :data:`AREA_POWER`,
-:data:`ROLL_POWER` and :data:`HEIGHT_WEIGHT`, are fitted to pybullet.  They are in the simulator's
-units (model units, gravity 9.81 units/s², the paper's drop from ~5 units),
-which is what :func:`diefab.physics.simulate.simulate` uses for every design, so no
-rescaling is needed.  By symmetry a Platonic
-solid stays uniform and mirror-image faces stay equal.
+It starts from the chain model (:mod:`diefab.models.chain`): the first contact
+of the solid-angle model, carried by quasi-static toppling and energy-barrier
+tumbling, weighted by rest height, with five constants fitted to pybullet.
 
 This chain applies to any convex die, but it is coarse: its error against
 pybullet varies with the shape in ways no per-face geometric term captured
 (a median TVD of 0.04-0.06 on random gems, more on other families).  What
 it misses is learned from simulations, one of two ways (:func:`fast_model`):
 
-4. **the gem discrepancy** (:class:`~diefab.models.discrepancy.Discrepancy`), for the gem family:
+1. **the gem discrepancy** (:class:`~diefab.models.discrepancy.Discrepancy`), for the gem family:
    simulated frequencies minus the chain's probabilities at random stable
    gems (800 in the packaged data), interpolated by a smoothed thin-plate
    spline over the parameters and the chain's own margins and
    probabilities, are added to the chain's probabilities;
-5. **the general correction** (:mod:`diefab.models.correction`), for every other
+2. **the general correction** (:mod:`diefab.models.correction`), for every other
    convex die: a per-face logit correction, a function of features every
    polyhedron has (margins, barriers, areas, the chain's own shares ...),
    fitted to random dice of every family, and applied only to dice like
