@@ -62,15 +62,12 @@ MESSAGE_MAX = 1000
 
 def main(argv: list[str] | None = None) -> None:
     """Console entry point: one-line errors, exit status 2 on bad input."""
-    import logging
     import signal
     import warnings
 
     from diefab.core import stopping
     from diefab.core.files import release_locks
 
-    # Dask's client logs its own view of a lost cluster; the command reports it in one line itself
-    logging.getLogger("distributed").setLevel(logging.CRITICAL)
     stopping.reset()
     caught = stopping.install()  # a kill (SIGTERM) or hang-up (SIGHUP) stops a run as cleanly as Ctrl-C
     try:

@@ -22,6 +22,7 @@ The settings of a drop are :class:`~diefab.dice.drop.PhysicsSettings`
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import signal
 import sys
@@ -339,6 +340,9 @@ def dask_client(scheduler, timeout: float = 3.0):
     from diefab.core.extras import require
 
     Client = require("distributed", "dask", "--scheduler").Client
+    # a lost cluster is reported by the caller as one PhysicsError, not by the client's own log lines
+    for name in ("distributed", "distributed.client", "distributed.core", "distributed.comm"):
+        logging.getLogger(name).setLevel(logging.CRITICAL)
     if isinstance(scheduler, Client):
         return scheduler, False
     if not isinstance(scheduler, str) or not scheduler.strip():
