@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import click
@@ -55,6 +56,8 @@ def read(design, params, camera_index, video, images, name, settle, min_confiden
     try:
         rows = list(read_log(log).rolls) if log.exists() else []
         source = frames(camera=camera_index, video=video, images=images)
+        first = next(source, None)  # opens the source: a bad one fails here, before the live table is drawn
+        source = itertools.chain([] if first is None else [first], source)
         _run(d, reader, source, log, rows, show, out_dir, name, photos=images is not None)
     finally:
         lock.release()
