@@ -1151,12 +1151,12 @@ def test_calibrate_resume_dot_names_the_profile_after_its_folder(calibration_run
 def test_a_full_disk_writing_run_json_leaves_no_run_folder(tmp_path, bad, monkeypatch):
     import errno
 
-    import diefab.search.simopt as simopt
+    import diefab.search.runlog as runlog
 
     def full(files, **kwargs):
-        raise simopt.OutputError(f"cannot write {next(iter(files))}: {os.strerror(errno.ENOSPC)}")
+        raise runlog.OutputError(f"cannot write {next(iter(files))}: {os.strerror(errno.ENOSPC)}")
 
-    monkeypatch.setattr(simopt, "write_files", full)
+    monkeypatch.setattr(runlog, "write_files", full)
     assert "No space left" in bad(*OPT, "--max-evals", "1", "--name", "r", "--out", tmp_path)
     assert not (tmp_path / "r").exists() and not list(tmp_path.glob(".*.lock"))
     assert "No space left" in bad("calibrate", *DIE, "--free", "restitution", "--name", "c", "--out", tmp_path)
