@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import os
 
 import numpy as np
 import pytest
@@ -105,12 +106,12 @@ def test_stats_bad_token_is_one_line(bad, tmp_path):
 
 def test_roll_refuses_a_second_process_and_needs_a_terminal(bad, tmp_path):
     pytest.importorskip("textual")
-    from filelock import FileLock
+    from diefab.core.files import ExclusiveLock
 
-    lock = FileLock(str(tmp_path / "d6.rolls.csv") + ".lock")
-    with lock:
-        assert "another process" in bad("roll", "d6", "--out", tmp_path)
+    with ExclusiveLock(tmp_path / "d6.rolls.csv", "a roll log"):
+        assert f"is in use by process {os.getpid()}" in bad("roll", "d6", "--out", tmp_path)
     assert "needs a terminal" in bad("roll", "d6", "--out", tmp_path)
+    assert not list(tmp_path.glob(".*.lock"))  # the lock file goes with the lock
 
 
 def test_roll_app_records_every_key_in_the_log(tmp_path):

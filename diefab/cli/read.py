@@ -35,11 +35,8 @@ def read(design, params, camera_index, video, images, name, settle, min_confiden
     (an empty value), never guessed.  The log (time,value,face,confidence,frame)
     gets one line per roll, written durably; run again to resume it.
     """
-    from filelock import FileLock, Timeout
-
     from diefab.camera.reader import RollReader, frames
-    from diefab.core.errors import OutputError
-    from diefab.core.files import ensure_dir, output_path
+    from diefab.core.files import ensure_dir, hold_lock, output_path
     from diefab.stats.rolllog import read_log
 
     if sum(x is not None for x in (camera_index, video, images)) != 1:
@@ -48,19 +45,12 @@ def read(design, params, camera_index, video, images, name, settle, min_confiden
     reader = RollReader(d, settle=settle, min_confidence=min_confidence, fov=fov)
     ensure_dir(out_dir)
     log = output_path(out_dir, name or d.name, "-rolls.csv")
-    lock = FileLock(str(log) + ".lock")
-    try:
-        lock.acquire(timeout=0)
-    except Timeout:
-        raise OutputError(f"another diefab read is writing {log}") from None
-    try:
-        rows = list(read_log(log).rolls) if log.exists() else []
-        source = frames(camera=camera_index, video=video, images=images)
-        first = next(source, None)  # opens the source: a bad one fails here, before the live table is drawn
-        source = itertools.chain([] if first is None else [first], source)
-        _run(d, reader, source, log, rows, show, out_dir, name, photos=images is not None)
-    finally:
-        lock.release()
+    hold_lock(log, f"roll log {log}")  # one writer per log, until the command ends
+    rows = list(read_log(log).rolls) if log.exists() else []
+    source = frames(camera=camera_index, video=video, images=images)
+    first = next(source, None)  # opens the source: a bad one fails here, before the live table is drawn
+    source = itertools.chain([] if first is None else [first], source)
+    _run(d, reader, source, log, rows, show, out_dir, name, photos=images is not None)
 
 
 def _run(d, reader, source, log, rows, show, out_dir, name, photos: bool) -> None:

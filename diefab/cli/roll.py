@@ -28,34 +28,24 @@ def roll(design, params, target, out, name, delta) -> None:
     and resumed; `diefab stats --rolls` and `diefab calibrate` read the log.
     One process at a time may write a log.
     """
-    from diefab.core.errors import OutputError, StatsError
-    from diefab.core.files import ensure_dir, output_path
+    from diefab.core.errors import StatsError
+    from diefab.core.extras import require
+    from diefab.core.files import ensure_dir, hold_lock, output_path
     from diefab.stats.rolllog import read_log, repair_log
     from diefab.stats.tally import Tally
     from diefab.stats.verdict import sequential_line, target_label
 
-    try:
-        import textual  # noqa: F401
-        from filelock import FileLock, Timeout
-    except ImportError as exc:
-        raise StatsError(f"diefab roll needs {exc.name}: pip install 'diefab[tally]'") from None
+    require("textual", "tally", "diefab roll")
     d = get_design(design, params, target)
     path = output_path(ensure_dir(out), name or d.name, ".rolls.csv")
-    lock = FileLock(str(path) + ".lock")
-    try:
-        lock.acquire(timeout=0)
-    except Timeout:
-        raise OutputError(f"another process is writing roll log {path}") from None
-    try:
-        if not (sys.stdin.isatty() and sys.stdout.isatty()):
-            raise StatsError("diefab roll needs a terminal (it reads one key per roll)")
-        repair_log(path)
-        tally = Tally(d.support, d.target_distribution.aligned(d.support), delta, read_log(path).values)
-        label = target_label(d.target)
-        app = roll_app(tally, path, f"{d.name} against {label}", label)
-        app.run()
-    finally:
-        lock.release()
+    hold_lock(path, f"roll log {path}")  # one writer per log, until the command ends
+    if not (sys.stdin.isatty() and sys.stdout.isatty()):
+        raise StatsError("diefab roll needs a terminal (it reads one key per roll)")
+    repair_log(path)
+    tally = Tally(d.support, d.target_distribution.aligned(d.support), delta, read_log(path).values)
+    label = target_label(d.target)
+    app = roll_app(tally, path, f"{d.name} against {label}", label)
+    app.run()
     click.echo(sequential_line(tally.result(), label))
     click.echo(f"roll log: {path} ({tally.n} rolls)")
 

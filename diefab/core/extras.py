@@ -37,6 +37,7 @@ EXTRAS = {
     "camera": "reading rolls from a camera",
     "docs": "building the documentation",
     "studio": "the web studio",
+    "tally": "the hand tally",
     "test": "running the tests",
 }
 
