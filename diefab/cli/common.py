@@ -185,6 +185,24 @@ def out_option(func):
     )(func)
 
 
+def _html_file(ctx, param, value: Path | None) -> Path | None:
+    if value is not None and value.suffix.lower() not in (".html", ".htm"):
+        raise click.BadParameter(f"{value} must end in .html", param_hint="--report")
+    return value
+
+
+def report_option(func):
+    """``--report FILE.html``: one self-contained page of the die, its net, its distribution and the verdict."""
+    return click.option(
+        "--report",
+        "report_file",
+        type=click.Path(dir_okay=False, path_type=Path),
+        default=None,
+        callback=_html_file,
+        help="Also write one self-contained HTML page to FILE: the die, its net, its distribution, the verdict.",
+    )(func)
+
+
 def json_option(func):
     return click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")(func)
 

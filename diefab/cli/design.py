@@ -21,6 +21,7 @@ from diefab.cli.common import (
     json_option,
     out_option,
     physics_file_option,
+    report_option,
     seed_option,
 )
 
@@ -75,13 +76,7 @@ def _slug(text: str) -> str:
               help="Refine and check against every standard throw and table (the shipped profiles soft-tray, "
               "wooden-table, hard-tray, low-spin, high-spin; each over --physics), judged by the worst.")  # fmt: skip
 @out_option
-@click.option(
-    "--report",
-    "report_file",
-    type=click.Path(dir_okay=False, path_type=Path),
-    default=None,
-    help="Also write one self-contained HTML page to FILE: the die, its net, its distribution, its check.",
-)
+@report_option
 @json_option
 @click.pass_context
 def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance, name, seed, size_mm, min_margin,
@@ -115,8 +110,6 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
     from diefab.stats.goodness import pearson_divergence, tvd
 
     t0 = time.monotonic()
-    if report_file is not None and report_file.suffix.lower() not in (".html", ".htm"):
-        raise click.BadParameter(f"{report_file} must end in .html", param_hint="--report")
     goal = parse_target(target)
     check_fill_options(fill_kind or "solid", fill_settings)
     changes = {FILL_OPTIONS[k][0]: v for k, v in fill_settings.items() if v is not None}

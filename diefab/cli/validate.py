@@ -23,6 +23,7 @@ from diefab.cli.common import (
     physics_settings,
     pop_fill,
     refuse_options,
+    report_option,
     seed_option,
     values_dict,
 )
@@ -37,13 +38,7 @@ from diefab.dice.design import format_value
 @click.option("--scheduler", default=None, metavar="ADDRESS", help="Run on this Dask scheduler (tcp://host:8786).")
 @click.option("--plot", "plot_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Write a bar chart to FILE (.png or .svg).")  # fmt: skip
-@click.option(
-    "--report",
-    "report_file",
-    type=click.Path(dir_okay=False, path_type=Path),
-    default=None,
-    help="Write one self-contained HTML page to FILE: the die, its net, the distribution, the verdict.",
-)
+@report_option
 @fill_options("paper", "print")
 @click.option("--target", default=None, help="Override the design's target distribution.")
 @click.option("--delta", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.03, show_default=True,
@@ -90,8 +85,6 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
         ensure_dir(plot_file.parent)
         check_outputs([plot_file], design_inputs(design, d))
     if report_file is not None:
-        if report_file.suffix.lower() not in (".html", ".htm"):
-            raise click.BadParameter(f"{report_file} must end in .html", param_hint="--report")
         ensure_dir(report_file.parent)
         check_outputs([report_file, *([plot_file] if plot_file else [])], design_inputs(design, d))
     bar = None
