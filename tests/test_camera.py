@@ -134,6 +134,8 @@ def test_read_command_logs_one_roll_per_photo_and_refuses_bad_input(tmp_path, ca
     assert stop.value.code == 0
     rows = read_log(tmp_path / "out" / "d6-rolls.csv").rolls
     assert len(rows) == 4
+    read = sum(r.value is not None for r in rows)
+    assert f"{read} rolls: TVD" in capsys.readouterr().out  # the verdict, as roll gives it
     assert all(r.value in (t, None) for r, t in zip(rows, truth))
     for args in (["--video", str(tmp_path / "missing.avi")], ["--images", str(tmp_path / "out")], []):
         with pytest.raises(SystemExit) as stop:
