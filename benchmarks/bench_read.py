@@ -2,6 +2,8 @@
 
     python benchmarks/bench_read.py [--rests 2000] [--drops 200] [--dice gem,d6,bipyramid24,d20] [--seed 1]
 
+(`--rests 0` or `--drops 0` leaves that part out, so the parts may run side by side.)
+
 For each die: `--rests` rendered rests (a resting face drawn uniformly, any
 yaw, random camera tilt up to 6 degrees, lens 55-75 degrees while the reader
 assumes 65, light, blur, noise, JPEG, and in 15 % of frames a finger from
@@ -133,24 +135,32 @@ def main() -> None:
     table = dice()
     for name in args.dice.split(","):
         design = table[name]
-        r = bench_rests(design, args.rests, args.seed)
-        clear = r["unread"] - r["unread_occluded"]
-        print(
-            f"{name:12s} rests: {r['n']} read {r['ok']} ({100 * r['ok'] / r['n']:.2f} %), wrong {r['wrong']}, "
-            f"unread {r['unread']} ({100 * r['unread'] / r['n']:.2f} %; {r['unread_occluded']} of them under a finger, "
-            f"which covers {r['occluded']} rests; with a clear view {clear} of {r['n'] - r['occluded']}, "
-            f"{100 * clear / max(r['n'] - r['occluded'], 1):.2f} %)"
-            f"; whole-frame read {r['ms_per_frame']:.1f} ms",
-            flush=True,
-        )
-        v = bench_video(design, args.drops, args.seed)
-        print(
-            f"{name:12s} video: {v['drops']} drops, {v['frames']} frames: counted once {v['once']}, missed "
-            f"{v['missed']}, twice {v['twice']}; right {v['right']}, wrong {v['wrong']}, unread {v['unread']} "
-            f"(cocked in the physics: {v['cocked']}); reader {v['fps']:.0f} frames/s vs whole-frame baseline "
-            f"{v['baseline_fps']:.1f} frames/s ({v['fps'] / v['baseline_fps']:.1f}x)",
-            flush=True,
-        )
+        if args.rests:
+            _print_rests(name, bench_rests(design, args.rests, args.seed))
+        if args.drops:
+            _print_video(name, bench_video(design, args.drops, args.seed))
+
+
+def _print_rests(name: str, r: dict) -> None:
+    clear = r["unread"] - r["unread_occluded"]
+    print(
+        f"{name:12s} rests: {r['n']} read {r['ok']} ({100 * r['ok'] / r['n']:.2f} %), wrong {r['wrong']}, "
+        f"unread {r['unread']} ({100 * r['unread'] / r['n']:.2f} %; {r['unread_occluded']} of them under a finger, "
+        f"which covers {r['occluded']} rests; with a clear view {clear} of {r['n'] - r['occluded']}, "
+        f"{100 * clear / max(r['n'] - r['occluded'], 1):.2f} %)"
+        f"; whole-frame read {r['ms_per_frame']:.1f} ms",
+        flush=True,
+    )
+
+
+def _print_video(name: str, v: dict) -> None:
+    print(
+        f"{name:12s} video: {v['drops']} drops, {v['frames']} frames: counted once {v['once']}, missed "
+        f"{v['missed']}, twice {v['twice']}; right {v['right']}, wrong {v['wrong']}, unread {v['unread']} "
+        f"(cocked in the physics: {v['cocked']}); reader {v['fps']:.0f} frames/s vs whole-frame baseline "
+        f"{v['baseline_fps']:.1f} frames/s ({v['fps'] / v['baseline_fps']:.1f}x)",
+        flush=True,
+    )
 
 
 if __name__ == "__main__":
