@@ -25,11 +25,11 @@ import sys
 import time
 
 
-def _progress(what: str, done: int, total: int, start: float) -> None:
-    """One line on stderr: how far, and the time left at the rate so far."""
+def _progress(what: str, done: int, total: int, start: float, so_far: str = "") -> None:
+    """One line on stderr: how far, the figures so far, and the time left at the rate so far."""
     spent = time.perf_counter() - start
     left = spent / done * (total - done) if done else float("nan")
-    print(f"  {what}: {done}/{total}, {spent:.0f} s, about {left:.0f} s left", file=sys.stderr, flush=True)
+    print(f"  {what}: {done}/{total}{so_far}, {spent:.0f} s, about {left:.0f} s left", file=sys.stderr, flush=True)
 
 
 def dice():
@@ -59,8 +59,9 @@ def bench_rests(design, n: int, seed: int) -> dict:
     spent = 0.0
     start = time.perf_counter()
     for i, rest in enumerate(rendered_rests(design, layout, n, seed)):
-        if i and i % 100 == 0:
-            _progress(f"{design.name} rests", i, n, start)
+        if i and i % 50 == 0:
+            so_far = f" (read {ok}, wrong {wrong}, unread {unread}, {unread_occluded} of them under a finger)"
+            _progress(f"{design.name} rests", i, n, start, so_far)
         t = time.process_time()
         read = read_frame(rest.image, design, detector, camera)
         spent += time.process_time() - t
@@ -96,9 +97,16 @@ def bench_video(design, drops: int, seed: int) -> dict:
     start = time.perf_counter()
     for f in frames:
         n += 1
-        if f.drop and f.drop % 25 == 0 and f.drop not in reported:
+        if f.drop and f.drop % 5 == 0 and f.drop not in reported:
             reported.add(f.drop)
-            _progress(f"{design.name} drops", f.drop, drops, start)
+            done = [counted[i] for i in range(f.drop)]
+            so_far = (
+                f" (counted once {sum(len(c) == 1 for c in done)}, twice {sum(len(c) > 1 for c in done)}, wrong "
+                f"{sum(any(r.value is not None and r.value != truth[i] for r in c) for i, c in enumerate(done))}, "
+                f"unread {sum(any(r.value is None for r in c) for c in done)}; reader {n / max(spent, 1e-9):.0f} "
+                f"frames/s, baseline {n / max(base_spent, 1e-9):.1f} frames/s)"
+            )
+            _progress(f"{design.name} drops", f.drop, drops, start, so_far)
         t = time.process_time()
         _, roll = reader.feed(f.image)
         spent += time.process_time() - t
