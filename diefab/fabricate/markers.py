@@ -188,6 +188,7 @@ def marker_summary(design: Design, sides_mm, cells_mm) -> str:
     bare = [n for k, n in enumerate(design.polyhedron.names) if k not in set(layout.faces.tolist())]
     rest = f"; faces {', '.join(bare)} too small for one" if bare else ""
     ids = [int(i) for i in layout.ids]
-    named = f"{ids[0]}-{ids[-1]}" if ids == list(range(ids[0], ids[-1] + 1)) and len(ids) > 2 else ", ".join(map(str, ids))
+    run = len(ids) > 2 and ids == list(range(ids[0], ids[-1] + 1))
+    named = f"{ids[0]}-{ids[-1]}" if run else ", ".join(map(str, ids))
     return (f"{len(layout.faces)} {layout.dictionary} markers (ids {named}), "
             f"{span} mm, cells {cell:.2f} mm and up{rest}")  # fmt: skip
