@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from diefab.core import tolerances as tol
 from diefab.core.errors import FabricationError
 from diefab.geometry.polyhedron import Polyhedron
 from diefab.made.bodies import label_mass
@@ -117,7 +118,7 @@ def inlay_labels(
     FabricationError
         A square that does not lie on the flat part of its face with that margin, naming the face.
     """
-    from shapely.geometry import Polygon
+    from shapely.geometry import Point, Polygon
 
     cots = max_cot_dihedral(poly)
     frames = square_frames(poly, faces, flat, axis)
@@ -132,12 +133,13 @@ def inlay_labels(
         square = np.column_stack([rel @ u, rel @ v])
         ring = flat[k]
         face2d = Polygon(np.column_stack([(ring - origin) @ u, (ring - origin) @ v]))
-        room = face2d.buffer(-depth_mm * cots[k], join_style="mitre") if cots[k] > 0 else face2d
-        if not room.buffer(1e-9).contains(Polygon(square)):
-            inside = room.exterior.distance(Polygon(square).exterior) if not room.is_empty else 0.0
+        margin = depth_mm * cots[k]
+        room = face2d.buffer(-margin, join_style="mitre") if margin > tol.NET_OVERLAP_MM else face2d
+        if not room.buffer(tol.NET_OVERLAP_MM).contains(Polygon(square)):
+            over = max(room.distance(Point(c)) for c in square) if not room.is_empty else np.inf
             raise FabricationError(
-                f"{text} ({np.linalg.norm(square[1] - square[0]):.2f} mm) does not lie on the flat part of face "
-                f"{poly.names[k]} with room for a {depth_mm:g} mm deep pocket (short by up to {inside:.2f} mm): "
+                f"{text} ({np.linalg.norm(square[1] - square[0]):.2f} mm) on face {poly.names[k]} reaches "
+                f"{over:.2f} mm past the flat part that keeps a {depth_mm:g} mm deep pocket inside the die: "
                 "use less --round or --depth, or a larger --size"
             )
         outline = cell_outline(cells[i], square, CELL_JOIN_MM)
