@@ -53,7 +53,7 @@ LETTER_FRACTION = 0.25
 #: Width reserved at the footer's right for "page n/N" and the calibration bar, mm.
 RIGHT_COLUMN = 22.0
 #: Where an edge letter may sit along its edge (fraction from its start): the middle, else beside a marker.
-LETTER_SPOTS = (0.5, 0.35, 0.65, 0.22, 0.78)
+LETTER_SPOTS = (0.5, 0.38, 0.62, 0.29, 0.71, 0.2, 0.8)
 #: Face-name height as a fraction of the value height.
 NAME_RATIO = 0.3
 _LEGEND = (
@@ -247,14 +247,34 @@ def _face_map(net: Net, k: int, axis: np.ndarray):
     return page[0], m[0], m[1]
 
 
-def _edge_letter(shape, size, p, q, d, up, face, clear):
-    """`shape` at `size` along edge p->q inside `face`, clear of `clear` (or None): the middle, else slid along."""
+def _edge_letter(shape, size, p, q, d, up, face, clear, others=None):
+    """`shape` at `size` along edge p->q inside `face`, clear of `clear` and `others` (shapely or None).
+
+    The middle of the edge; on a face with a marker (`clear`: its quiet
+    zone), the free spot farthest from the room the marker leaves for the
+    value label.
+    """
+    from shapely.ops import polylabel
+
     half = (shape.bounds[3] - shape.bounds[1]) * size / 2
+    spots = []
     for t in LETTER_SPOTS:
         placed = _framed(_scaled(shape, size, 0, 0), p + t * (q - p) - up * (half + 0.4), d, up)
-        if face.buffer(-0.2).contains(placed) and (clear is None or not placed.intersects(clear)):
-            return placed
-    return None
+        if face.buffer(-0.2).contains(placed) and not any(
+            z is not None and placed.intersects(z) for z in (clear, others)
+        ):
+            if clear is None:
+                return placed
+            spots.append(placed)
+    if not spots:
+        return None
+    room = face.buffer(-FACE_MARGIN, join_style="mitre").difference(clear)
+    if room.geom_type != "Polygon":
+        room = max(getattr(room, "geoms", [room]), key=lambda g: g.area)
+    if room.is_empty:
+        return spots[0]
+    middle = polylabel(room, 0.05)
+    return max(spots, key=lambda placed: placed.distance(middle))
 
 
 def _die_texts(net: Net, labels: dict[str, str], axis, *, face_names, mark, pips, values, font, bold, marks=(),
@@ -277,6 +297,12 @@ def _die_texts(net: Net, labels: dict[str, str], axis, *, face_names, mark, pips
         out.append(Text(f"marker {m.marker_id}", "marker", m.outline, m.face, m.side_mm))
         occupied[k].append(m.keep_clear())
         clear[k] = m.keep_clear()
+    corner_zones: dict[int, list] = {}
+    for m in marks:
+        k = poly.face_index(m.face)
+        ring = list(poly.faces[k])
+        zone = mark_frame(net.faces[k], tuple(ring.index(v) for v in m.at), y_down=True)[0]
+        corner_zones.setdefault(k, []).append(zone)
     for k, ring in enumerate(net.faces):
         face = Polygon(ring)
         centre = np.asarray(face.centroid.coords[0])
@@ -289,7 +315,12 @@ def _die_texts(net: Net, labels: dict[str, str], axis, *, face_names, mark, pips
             size = min(EDGE_TEXT, 0.25 * length, LETTER_FRACTION * inradius)
             letter = net.edge_labels[e]
             d, up = _edge_axes(p, q, centre - (p + q) / 2)
-            placed = _edge_letter(_letter(letter, font), size, p, q, d, up, face, clear.get(k))
+            others = None
+            if k in clear:  # a letter slid along its edge keeps off the other letters and the values in corners
+                from shapely.ops import unary_union
+
+                others = unary_union([*occupied[k], *corner_zones.get(k, [])])
+            placed = _edge_letter(_letter(letter, font), size, p, q, d, up, face, clear.get(k), others)
             if placed is not None:
                 out.append(Text(letter, "edge", placed, names[k], size))
                 occupied[k].append(placed.buffer(LETTER_CLEARANCE))
