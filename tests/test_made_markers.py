@@ -14,7 +14,7 @@ import pytest
 
 from diefab.core.errors import FabricationError
 from diefab.dice.design import load_design
-from diefab.dice.markers import marker_cells, marker_layout
+from diefab.dice.markers import LABEL_SHARE, MARGIN_FRACTION, marker_cells, marker_layout
 from diefab.fabricate.formats import threemf_bytes
 from diefab.fabricate.markers import MIN_PAPER_CELL_MM, QUIET_CELLS, check_cells, net_markers
 from diefab.fabricate.net import design_net, render_net
@@ -67,12 +67,12 @@ def test_net_markers_lie_inside_their_faces_with_a_margin(name):
     for m in marks:
         ring = net.faces[net.poly.face_index(m.face)]
         square = Polygon(m.corners)
-        # a square of the right side, at least 12 % of the face's inscribed radius from every edge
+        # a square of the right side, the layout's margin (a share of the face's inscribed radius) from every edge
         sides = np.linalg.norm(np.roll(m.corners, -1, axis=0) - m.corners, axis=1)
         assert np.allclose(sides, m.side_mm, rtol=1e-9)
         assert np.dot(m.corners[1] - m.corners[0], m.corners[3] - m.corners[0]) == pytest.approx(0, abs=1e-9)
         margin = Polygon(ring).exterior.distance(square)
-        assert margin >= 0.12 * _inradius(ring) * (1 - 1e-3)
+        assert margin >= MARGIN_FRACTION * _inradius(ring) * (1 - 1e-3)
         assert Polygon(ring).contains(square)
         # the dark cells are the marker's own cells, in its square
         cells = marker_cells(layout.dictionary, m.marker_id)
@@ -81,14 +81,14 @@ def test_net_markers_lie_inside_their_faces_with_a_margin(name):
 
 
 def test_d6_marker_is_as_large_as_the_face_allows_beside_its_value(d6, d6_net):
-    """A cube's face of side s: the margin square is s − 2·0.12·s/2; the marker takes 62 % of it, pushed to an edge."""
+    """A cube face of side s: the margin square is s − f·s; the marker takes its label share, slid to an edge."""
     s = 16.0
-    room = s - 2 * 0.12 * s / 2
+    room = s - 2 * MARGIN_FRACTION * s / 2
     for m in net_markers(d6, d6_net):
         ring = d6_net.faces[d6_net.poly.face_index(m.face)]
-        assert m.side_mm == pytest.approx(0.62 * room, rel=1e-6)
+        assert m.side_mm == pytest.approx(LABEL_SHARE * room, rel=1e-6)
         # slid against the margin on one side: the value gets the rest of the face
-        assert Polygon(ring).exterior.distance(Polygon(m.corners)) == pytest.approx(0.12 * s / 2, abs=1e-6)
+        assert Polygon(ring).exterior.distance(Polygon(m.corners)) == pytest.approx(MARGIN_FRACTION * s / 2, abs=1e-6)
 
 
 def test_net_labels_and_letters_keep_out_of_the_quiet_zone(d6, d6_net):
@@ -150,7 +150,10 @@ def test_paper_balance_is_unchanged_by_the_ink(run, tmp_path):
 def test_net_markers_cli_reports_them(run, tmp_path):
     code, out, err = run("net", "d6", "--markers", "--out", tmp_path, "--format", "svg")
     assert code == 0, err
-    assert "markers: 6 DICT_4X4_50 markers (ids 0-5), 8.7 mm, cells 1.45 mm" in out
+    layout = marker_layout(load_design("d6"))
+    side = layout.sides[0] * load_design("d6").mm_per_unit
+    cells = f"cells {side / (layout.bits + 2):.2f} mm"
+    assert f"markers: 6 {layout.dictionary} markers (ids 0-5), {side:.1f} mm, {cells}" in out
     svg = (tmp_path / "d6-net.svg").read_text()
     assert svg.count('class="marker"') == 6
 
@@ -294,10 +297,14 @@ def test_prusa_slicer_slices_the_two_part_3mf(d6_solid, tmp_path):
 
 
 def test_too_small_a_marker_names_the_face_and_the_size_that_does(d6):
-    with pytest.raises(FabricationError, match=r"face f\d is too small .* 8\.73 mm \(6x6 cells .*use --size 17\.6 "):
-        check_cells(d6, 16.0, 1.6, "--min-stroke")
-    check_cells(d6, 17.6, 1.6, "--min-stroke")  # the size it names does
-    check_cells(d6, 16.0, 1.45, "--min-stroke")  # 1.455 mm cells pass
+    layout = marker_layout(d6)
+    n = layout.bits + 2
+    cell = layout.sides.min() * d6.mm_per_unit / n
+    need = np.ceil(16.0 * 1.1 * 10) / 10  # cells 10 % finer than asked for: the size 10 % larger, rounded up
+    with pytest.raises(FabricationError, match=rf"face f\d is too small .* \({n}x{n} cells .*use --size {need:g} "):
+        check_cells(d6, 16.0, 1.1 * cell, "--min-stroke")
+    check_cells(d6, need, 1.1 * cell, "--min-stroke")  # the size it names does
+    check_cells(d6, 16.0, cell, "--min-stroke")
 
 
 @pytest.mark.parametrize(
