@@ -16,7 +16,7 @@ from diefab.core.errors import FabricationError
 from diefab.dice.design import load_design
 from diefab.dice.markers import LABEL_SHARE, MARGIN_FRACTION, marker_cells, marker_layout
 from diefab.fabricate.formats import threemf_bytes
-from diefab.fabricate.markers import MIN_PAPER_CELL_MM, QUIET_CELLS, check_cells, net_markers
+from diefab.fabricate.markers import MIN_PAPER_CELL_MM, QUIET_CELLS, check_cells, marked_body, net_markers
 from diefab.fabricate.net import design_net, render_net
 from diefab.fabricate.stl import build_solid, mesh_moments
 from diefab.made.inlays import CELL_JOIN_MM, cell_outline
@@ -230,6 +230,8 @@ def test_printed_mass_model_weighs_the_marker_pockets(d6, d6_solid):
     both = mass_properties(d6.polyhedron, fill, mm_per_unit=scale, bed=bed, labels=labels + markers)
     assert np.allclose(both.center * scale, d6_solid.report["center_of_mass_mm"]["printed"], atol=1e-9)
     assert both.mass * scale**3 * 1.24e-3 == pytest.approx(d6_solid.report["mass_g"], rel=1e-9)
+    # the body the balance line weighs (its inertia too) is the same print
+    assert np.allclose(marked_body(d6_solid, fill).center, both.center, atol=1e-12)
     alone = mass_properties(d6.polyhedron, fill, mm_per_unit=scale, bed=bed, labels=labels)
     assert not np.allclose(alone.center, both.center, atol=1e-6)  # the markers are in it
 

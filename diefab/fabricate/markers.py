@@ -46,6 +46,7 @@ __all__ = [
     "QUIET_CELLS",
     "NetMarker",
     "check_cells",
+    "marked_body",
     "marker_summary",
     "net_markers",
     "solid_markers",
@@ -192,3 +193,22 @@ def marker_summary(design: Design, sides_mm, cells_mm) -> str:
     named = f"{ids[0]}-{ids[-1]}" if run else ", ".join(map(str, ids))
     return (f"{len(layout.faces)} {layout.dictionary} markers (ids {named}), "
             f"{span} mm, cells {cell:.2f} mm and up{rest}")  # fmt: skip
+
+
+def marked_body(solid, fill):
+    """Mass properties (model units, unit density) of the print of `solid` with its labels and markers as cut.
+
+    The sharp die's walls, skins and infill (:func:`~diefab.made.mass.mass_properties`)
+    with one prism per placed label (raised where `solid` embosses it) and per
+    marker (always sunk), at the depth `solid` was cut to.
+    """
+    from diefab.made.bodies import label_mass
+    from diefab.made.mass import mass_properties
+
+    r = solid.report
+    poly = solid.design.polyhedron
+    raised = set(r["embossed"])
+    prisms = [label_mass(poly, lb, r["depth_mm"], lb.face in raised) for lb in solid.labels]
+    prisms += [label_mass(poly, m, r["depth_mm"], False) for m in solid.markers]
+    return mass_properties(poly, fill, mm_per_unit=r["mm_per_unit"], bed=poly.face_index(r["bed_face"]),
+                           labels=tuple(prisms))  # fmt: skip
