@@ -47,6 +47,7 @@ __all__ = [
     "NetMarker",
     "check_cells",
     "marked_body",
+    "marker_report",
     "marker_summary",
     "net_markers",
     "solid_markers",
@@ -212,3 +213,25 @@ def marked_body(solid, fill):
     prisms += [label_mass(poly, m, r["depth_mm"], False) for m in solid.markers]
     return mass_properties(poly, fill, mm_per_unit=r["mm_per_unit"], bed=poly.face_index(r["bed_face"]),
                            labels=tuple(prisms))  # fmt: skip
+
+
+def marker_report(markers: tuple[Label, ...], depth_mm: float, volume: float, first: np.ndarray) -> dict[str, Any]:
+    """The inlaid markers for the solid's report, and how far their pockets move its centre of mass.
+
+    `volume` (mm³) and `first` ((3,) mm⁴, its first moments) are the solid's as cut; the pockets are
+    prisms of the markers' outlines, `depth_mm` deep, so the solid without them is known exactly.
+    """
+    cut = [m.area_mm2 * depth_mm for m in markers]
+    moments = [v * (m.centroid_mm - 0.5 * depth_mm * m.normal) for v, m in zip(cut, markers)]
+    uncut = (first + np.sum(moments, axis=0)) / (volume + sum(cut))
+    shift = first / volume - uncut
+    return {
+        "markers": {
+            m.face: {"id": int(m.text.split()[-1]), "side_mm": m.height_mm, "cell_mm": m.stroke_mm,
+                     "area_mm2": m.area_mm2, "center_mm": m.center_mm.tolist()}
+            for m in markers
+        },
+        "marker_volume_mm3": float(sum(cut)),
+        "marker_com_shift_mm": shift.tolist(),
+        "marker_com_shift_norm_mm": float(np.linalg.norm(shift)),
+    }  # fmt: skip

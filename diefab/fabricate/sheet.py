@@ -281,7 +281,7 @@ def _die_texts(net: Net, labels: dict[str, str], axis, *, face_names, mark, pips
                markers=()):  # fmt: skip
     """Texts of one copy: markers, edge and tab letters, values at corners and edges, face labels (page mm)."""
     from shapely.geometry import Polygon
-    from shapely.ops import polylabel
+    from shapely.ops import polylabel, unary_union
 
     poly = net.poly
     names = poly.names
@@ -298,7 +298,7 @@ def _die_texts(net: Net, labels: dict[str, str], axis, *, face_names, mark, pips
         occupied[k].append(m.keep_clear())
         clear[k] = m.keep_clear()
     corner_zones: dict[int, list] = {}
-    for m in marks:
+    for m in marks if markers else ():
         k = poly.face_index(m.face)
         ring = list(poly.faces[k])
         zone = mark_frame(net.faces[k], tuple(ring.index(v) for v in m.at), y_down=True)[0]
@@ -317,8 +317,6 @@ def _die_texts(net: Net, labels: dict[str, str], axis, *, face_names, mark, pips
             d, up = _edge_axes(p, q, centre - (p + q) / 2)
             others = None
             if k in clear:  # a letter slid along its edge keeps off the other letters and the values in corners
-                from shapely.ops import unary_union
-
                 others = unary_union([*occupied[k], *corner_zones.get(k, [])])
             placed = _edge_letter(_letter(letter, font), size, p, q, d, up, face, clear.get(k), others)
             if placed is not None:

@@ -503,7 +503,9 @@ def build_solid(
             poly.names[k]: 0.0 if ring is None else _ring_area(ring) for k, ring in enumerate(flat)
         }
     if inlays:
-        report.update(_marker_report(inlays, depth_mm, volume, first))
+        from diefab.fabricate.markers import marker_report
+
+        report.update(marker_report(inlays, depth_mm, volume, first))
     report["bed_face"] = bed_name
     report["embossed"] = list(dict.fromkeys(label.face for label, up in zip(labels, raised) if up))
     report["engraved"] = list(dict.fromkeys(label.face for label, up in zip(labels, raised) if not up))
@@ -662,24 +664,6 @@ def _label_report(labelling: Labelling) -> dict[str, Any]:
             for label, m in zip(labelling.marks, labelling.placed)
         ],
     }
-
-
-def _marker_report(markers: tuple[Label, ...], depth_mm: float, volume: float, first: np.ndarray) -> dict[str, Any]:
-    """The inlaid markers and how far their pockets move the solid's centre (prisms, area × depth)."""
-    cut = [m.area_mm2 * depth_mm for m in markers]
-    moments = [v * (m.centroid_mm - 0.5 * depth_mm * m.normal) for v, m in zip(cut, markers)]
-    uncut = (first + np.sum(moments, axis=0)) / (volume + sum(cut))
-    shift = first / volume - uncut
-    return {
-        "markers": {
-            m.face: {"id": int(m.text.split()[-1]), "side_mm": m.height_mm, "cell_mm": m.stroke_mm,
-                     "area_mm2": m.area_mm2, "center_mm": m.center_mm.tolist()}
-            for m in markers
-        },
-        "marker_volume_mm3": float(sum(cut)),
-        "marker_com_shift_mm": shift.tolist(),
-        "marker_com_shift_norm_mm": float(np.linalg.norm(shift)),
-    }  # fmt: skip
 
 
 def _mesh_arrays(manifold) -> tuple[np.ndarray, np.ndarray]:
