@@ -49,7 +49,7 @@ from diefab.core.errors import DiefabError, PhysicsError, StatsError
 from diefab.dice.design import Design
 from diefab.physics.simulate import MAX_DROPS
 from diefab.search.runlog import RunLog
-from diefab.search.simopt import RUN_FORMAT, RunError, check_budget
+from diefab.search.runspec import RUN_FORMAT, RunError, check_budget
 
 __all__ = [
     "DEFAULT_FREE",
@@ -320,7 +320,7 @@ class CalibrationSpec:
     `max_sims`, `method`, `sigma0`) mean what they mean in
     :class:`diefab.search.simopt.RunSpec`; `method` may also be ``"grid"``:
     `grid_points` evenly spaced points per parameter in the unit cube,
-    narrowed by successive halving (:func:`diefab.search.simopt._run_grid`).
+    narrowed by successive halving (:func:`diefab.search.simmethods.run_grid`).
     `bounds` maps the unit cube to the settings and `physics` holds the
     settings that are not fitted.
     """
