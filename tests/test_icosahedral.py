@@ -35,3 +35,22 @@ def test_the_die_that_3d6_asks_for_is_steady():
     """Near the share 3d6 asks for (the pentagons a sixth of the landings), the die tips by more than 12 degrees."""
     poly = family("icosahedral").polyhedron({"d": 1.02})
     assert tipping_angle(poly, poly.centroid) > 12
+
+
+@pytest.mark.slow  # builds two grids of 81 dice of 42 faces each, twice
+def test_design_makes_the_icosahedral_die_by_name_or_by_its_face_count():
+    from diefab.dice.targets import parse_target
+    from diefab.search.counting import nearest_icosahedral
+    from diefab.search.synthesis import synthesize
+
+    target = parse_target("3d6")
+    by_name = synthesize(target, family="icosahedral", model="fast")
+    by_faces = synthesize(target, faces=42, model="fast")
+    assert by_name.design.family == by_faces.design.family == "icosahedral"
+    assert by_name.design.params == by_faces.design.params
+    assert by_name.method == "two-class-nearest"
+    # the fast model respects the die's symmetry: at the share it was tuned to, the die rolls the counted plan
+    plan = nearest_icosahedral(target).plan
+    assert np.allclose(by_name.predicted, plan.per_value(plan.share), atol=1e-4)
+    pentagons = [by_name.design.values[f"f{k}"] for k in range(1, 13)]
+    assert np.bincount(pentagons, minlength=19)[3:].tolist() == list(plan.alpha)

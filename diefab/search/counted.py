@@ -45,9 +45,9 @@ __all__ = [
     "two_class_design",
 ]
 
-#: Families made only as counted dice, their faces counted out and one share tuned: asked for by name, they
-#: skip the shaped candidates.
-COUNTED_FAMILIES = ("icosahedral",)
+#: Families made only as counted dice (their faces counted out, one share tuned), with their face counts: asked
+#: for by name, or by that face count, they skip the shaped candidates.
+COUNTED_FAMILIES = {"icosahedral": 42}
 #: Smallest tipping angle (degrees) a two-class die's tuning may reach.
 STEADY_TIPPING = 9.0
 
@@ -89,7 +89,7 @@ def counted_family(
     """The die of `family`, a family made only as a counted die, nearest `target`."""
     nearest = nearest_counted(target, faces, family)
     if nearest is None:
-        size = {"icosahedral": 42}.get(family)
+        size = COUNTED_FAMILIES[family]
         raise DesignError(f"the {family} die has {size} faces: it cannot carry the {len(target.values)} values of "
                           f"target {target.spec!r}{'' if faces in (None, size) else f' on {faces} faces'}")  # fmt: skip
     run.say(f"{family}: {nearest.faces} faces counted out, TVD {float(nearest.tvd):.4f} by exact arithmetic")

@@ -210,8 +210,11 @@ def synthesize(
     if final_model not in MODELS:
         raise DesignError(f"model {model!r} is not available (models: {', '.join([*MODELS, 'simulation'])})")
     run = SearchRun(seed, max_drops, deadline, workers, scheduler, settings, say, tick)
-    if family in COUNTED_FAMILIES:
-        return counted_family(target, faces, family, name, fill, size_mm, model, final_model, run)
+    only = family if family in COUNTED_FAMILIES else None
+    if family is None and faces is not None:  # a face count only a counted-only family has
+        only = next((f for f, m in COUNTED_FAMILIES.items() if m == faces), None)
+    if only is not None:
+        return counted_family(target, faces, only, name, fill, size_mm, model, final_model, run)
     try:
         pool = candidates(target, faces, family)
     except DesignError as exc:
