@@ -135,11 +135,13 @@ def signals_deferred():
         return
     noted: list[int] = []
     previous = {}
-    for signum in STOP_SIGNALS:
-        handler = signal.getsignal(signum)
-        if handler is not signal.SIG_IGN and handler is not None:  # None: set outside Python, left alone
-            previous[signum] = signal.signal(signum, lambda s, frame: noted.append(s))
     try:
+        # inside the try: a stop received before runs its handler in one of these calls, and the handlers
+        # already swapped must be put back
+        for signum in STOP_SIGNALS:
+            handler = signal.getsignal(signum)
+            if handler is not signal.SIG_IGN and handler is not None:  # None: set outside Python, left alone
+                previous[signum] = signal.signal(signum, lambda s, frame: noted.append(s))
         yield
     finally:
         for signum, handler in previous.items():

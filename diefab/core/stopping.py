@@ -13,12 +13,20 @@ end the process at once with one line and exit status 130: nothing has been
 written yet, and an exception raised inside a half-imported module would
 print a traceback or be swallowed by it.
 
+Once the command has finished, its exit status stands.  The interpreter
+resets every signal handler to the default before it tears down its modules
+(a tenth of a second and more with NumPy, SciPy and trimesh loaded), and a
+stop signal then would kill the process, reporting a finished command as
+killed.  The command's last exit hook therefore ignores the stop signals,
+after it has handled one already received.
+
 This module imports nothing but the standard library and calls
 :func:`install_early` when imported: the package imports it first.
 """
 
 from __future__ import annotations
 
+import atexit
 import os
 import signal
 import sys
@@ -79,6 +87,21 @@ def install_early() -> None:
     """When this process is the ``diefab`` command, make a stop signal exit at once (status 130, one line)."""
     if _is_command():
         _install(_exit_now)
+        # registered before any of the package's and its libraries' hooks, so it runs after them
+        atexit.register(_ignore_at_exit)
+
+
+def _ignore_at_exit() -> None:
+    """Ignore the stop signals from here to the end of the process (the interpreter's teardown).
+
+    ``signal.signal`` first runs the handler of a stop signal already
+    received, so a stop that came before this point still ends the command
+    with its one line and status 130.
+    """
+    try:
+        _install(signal.SIG_IGN)
+    except KeyboardInterrupt:  # a stop received, whose handler was the command's
+        _exit_now(None, None)
 
 
 def _install(handler) -> dict[int, object]:

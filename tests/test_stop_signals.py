@@ -1,0 +1,86 @@
+"""Stop signals at the edges of a command: while the interpreter tears down, and while handlers are swapped.
+
+A command that has finished keeps its exit status: a stop signal that arrives while the interpreter
+tears itself down (after it has reset every handler to the default) must not kill the process, which
+would report a finished command as killed.  A stop that lands while the handlers are being swapped
+around a write must not leave a swapped handler behind.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+#: A module that `site` imports at start-up: an object whose finalizer runs in the interpreter's teardown, after
+#: the signal handlers are reset, says so on stderr and holds the teardown open long enough to be signalled.
+SLOW_TEARDOWN = textwrap.dedent(
+    """
+    import os
+    import time
+
+
+    class _SlowTeardown:
+        def __del__(self, write=os.write, sleep=time.sleep):
+            write(2, b"tearing down\\n")
+            sleep(3)
+
+
+    _keep = _SlowTeardown()
+    """
+)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="process groups")
+@pytest.mark.parametrize("signum", [signal.SIGHUP, signal.SIGTERM, signal.SIGINT])
+def test_a_stop_during_the_interpreters_teardown_leaves_the_exit_status(tmp_path, signum):
+    (tmp_path / "sitecustomize.py").write_text(SLOW_TEARDOWN)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), str(ROOT)])}
+    proc = subprocess.Popen([sys.executable, "-m", "diefab", "templates"], cwd=tmp_path, env=env, text=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)  # fmt: skip
+    try:
+        assert proc.stderr.readline() == "tearing down\n"  # the command has finished; the handlers are reset
+        os.killpg(proc.pid, signum)
+        out, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+    assert proc.returncode == 0, (proc.returncode, err)  # not -signum: the finished command's own status
+    assert "fudge-gem" in out and err == ""
+
+
+def test_a_stop_while_the_handlers_are_swapped_leaves_none_swapped(monkeypatch):
+    """A pending stop runs its handler inside ``signal.signal``: the handlers swapped so far are put back."""
+    from diefab.core import files
+
+    signums = (signal.SIGUSR1, signal.SIGUSR2)
+    monkeypatch.setattr(files, "STOP_SIGNALS", signums)
+    originals = {s: signal.signal(s, lambda *_: None) for s in signums}
+    before = {s: signal.getsignal(s) for s in signums}
+    real = signal.signal
+    calls = []
+
+    def pending_stop_on_second_swap(signum, handler):
+        calls.append(signum)
+        if len(calls) == 2:
+            raise KeyboardInterrupt  # the handler of a signal that arrived just before
+        return real(signum, handler)
+
+    monkeypatch.setattr(files.signal, "signal", pending_stop_on_second_swap)
+    try:
+        with pytest.raises(KeyboardInterrupt), files.signals_deferred():
+            pass
+    finally:
+        monkeypatch.setattr(files.signal, "signal", real)
+        after = {s: signal.getsignal(s) for s in signums}
+        for s, handler in originals.items():
+            signal.signal(s, handler)
+    assert after == before
