@@ -15,6 +15,7 @@ import sys
 import textwrap
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -84,3 +85,67 @@ def test_a_stop_while_the_handlers_are_swapped_leaves_none_swapped(monkeypatch):
         for s, handler in originals.items():
             signal.signal(s, handler)
     assert after == before
+
+
+@pytest.mark.skipif(not hasattr(signal, "setitimer"), reason="needs interval timers")
+def test_a_stop_while_a_lock_is_taken_or_released_leaves_no_lock_file(tmp_path, monkeypatch):
+    from diefab.core import files
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGALRM, interrupt)  # a stand-in for Ctrl-C that a timer can send at any moment
+    monkeypatch.setattr(files, "STOP_SIGNALS", (*files.STOP_SIGNALS, signal.SIGALRM))
+    rng = np.random.default_rng(1)
+    interrupted = 0
+    try:
+        for _ in range(200):
+            try:
+                signal.setitimer(signal.ITIMER_REAL, rng.uniform(0, 0.001))
+                while True:  # the stop lands anywhere in the cycle of taking and releasing the lock
+                    files.hold_lock(tmp_path / "r", "run r")
+                    files.release_locks()
+            except KeyboardInterrupt:
+                interrupted += 1
+            finally:
+                signal.setitimer(signal.ITIMER_REAL, 0)
+                files.release_locks()  # what the command line does on its way out
+            assert not list(tmp_path.iterdir())
+    finally:
+        signal.signal(signal.SIGALRM, previous)
+    assert interrupted == 200
+
+
+#: Start-up code that sends the process a hang-up just as it lets go of a lock (the command's last steps).
+HANG_UP_ON_RELEASE = textwrap.dedent(
+    """
+    import os
+    import signal
+
+    from diefab.core import files
+
+    _release = files.ExclusiveLock.release
+
+
+    def release(self):
+        os.kill(os.getpid(), signal.SIGHUP)
+        _release(self)
+
+
+    files.ExclusiveLock.release = release
+    """
+)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="process groups")
+def test_a_stop_as_the_command_lets_go_of_its_locks_is_one_line_and_no_lock_file(tmp_path):
+    pytest.importorskip("textual")
+    (tmp_path / "sitecustomize.py").write_text(HANG_UP_ON_RELEASE)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), str(ROOT)])}
+    out = tmp_path / "out"
+    proc = subprocess.run([sys.executable, "-m", "diefab", "roll", "d6", "--out", str(out)], env=env, text=True,
+                          stdin=subprocess.DEVNULL, capture_output=True, timeout=120)  # fmt: skip
+    lines = proc.stderr.splitlines()
+    assert proc.returncode == 130 and lines[-1] == "diefab: interrupted" and "Traceback" not in proc.stderr, lines
+    assert "needs a terminal" in lines[0]  # the command's own end came first: it took its lock, then refused
+    assert not list(out.iterdir())  # the lock file went with the lock

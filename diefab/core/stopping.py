@@ -32,7 +32,7 @@ import signal
 import sys
 import threading
 
-__all__ = ["STOP_SIGNALS", "check_stop", "install", "install_early", "reset", "stop_requested"]
+__all__ = ["STOP_SIGNALS", "check_stop", "install", "install_early", "reset", "restore", "stop_requested"]
 
 #: The signals that stop a command.
 STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
@@ -81,6 +81,26 @@ def install() -> dict[int, object]:
     say) is left alone.  Only in the main thread.
     """
     return _install(_interrupt)
+
+
+def restore(previous: dict[int, object], pending: list[int] | tuple[int, ...] = ()) -> None:
+    """Put back the handlers :func:`install` replaced; deliver to them the stops `pending` and those received meanwhile.
+
+    ``signal.signal`` first runs the handler of a signal already received:
+    its ``KeyboardInterrupt`` is caught here, the swap finished, and the
+    signal raised again once the handlers are back (for the command line,
+    one line and exit status 130 at once).
+    """
+    noted = list(pending)
+    for signum, handler in previous.items():
+        while True:
+            try:
+                signal.signal(signum, handler)
+                break
+            except KeyboardInterrupt:
+                noted.append(stop_requested() or signal.SIGINT)
+    for signum in dict.fromkeys(noted):
+        signal.raise_signal(signum)
 
 
 def install_early() -> None:
