@@ -861,30 +861,14 @@ def test_messages_name_the_culprit(tmp_path, bad, monkeypatch, args, words):
     assert words in bad(*args)
 
 
-@pytest.mark.skipif(not hasattr(signal, "setitimer"), reason="needs interval timers")
-def test_an_interrupt_during_a_write_leaves_no_temporary_file(tmp_path, monkeypatch):
+def test_an_interrupt_during_a_write_leaves_no_temporary_file(tmp_path, interrupt_at_random):
     from diefab.core import files
 
-    def interrupt(signum, frame):
-        raise KeyboardInterrupt
+    def write_until_stopped():
+        files.write_files({tmp_path / "a.toml": "a" * 20_000, tmp_path / "b.toml": "b" * 20_000})
+        time.sleep(0.003)
 
-    previous = signal.signal(signal.SIGALRM, interrupt)  # a stand-in for Ctrl-C that a timer can send at any moment
-    monkeypatch.setattr(files, "STOP_SIGNALS", (*files.STOP_SIGNALS, signal.SIGALRM))
-    rng = np.random.default_rng(0)
-    interrupted = 0
-    try:
-        for _ in range(300):
-            try:
-                signal.setitimer(signal.ITIMER_REAL, rng.uniform(0, 0.002))
-                files.write_files({tmp_path / "a.toml": "a" * 20_000, tmp_path / "b.toml": "b" * 20_000})
-                time.sleep(0.003)
-            except KeyboardInterrupt:
-                interrupted += 1
-            finally:
-                signal.setitimer(signal.ITIMER_REAL, 0)
-    finally:
-        signal.signal(signal.SIGALRM, previous)
-    assert interrupted == 300  # every interrupt arrived, none was lost
+    assert interrupt_at_random(write_until_stopped, 300, 0.002) == 300  # every interrupt arrived, none was lost
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.toml", "b.toml"]  # and none stranded a temporary file
     assert (tmp_path / "a.toml").read_text() == "a" * 20_000
 

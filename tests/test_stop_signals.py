@@ -15,7 +15,6 @@ import sys
 import textwrap
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -87,33 +86,19 @@ def test_a_stop_while_the_handlers_are_swapped_leaves_none_swapped(monkeypatch):
     assert after == before
 
 
-@pytest.mark.skipif(not hasattr(signal, "setitimer"), reason="needs interval timers")
-def test_a_stop_while_a_lock_is_taken_or_released_leaves_no_lock_file(tmp_path, monkeypatch):
+def test_a_stop_while_a_lock_is_taken_or_released_leaves_no_lock_file(tmp_path, interrupt_at_random):
     from diefab.core import files
 
-    def interrupt(signum, frame):
-        raise KeyboardInterrupt
-
-    previous = signal.signal(signal.SIGALRM, interrupt)  # a stand-in for Ctrl-C that a timer can send at any moment
-    monkeypatch.setattr(files, "STOP_SIGNALS", (*files.STOP_SIGNALS, signal.SIGALRM))
-    rng = np.random.default_rng(1)
-    interrupted = 0
-    try:
-        for _ in range(200):
-            try:
-                signal.setitimer(signal.ITIMER_REAL, rng.uniform(0, 0.001))
-                while True:  # the stop lands anywhere in the cycle of taking and releasing the lock
-                    files.hold_lock(tmp_path / "r", "run r")
-                    files.release_locks()
-            except KeyboardInterrupt:
-                interrupted += 1
-            finally:
-                signal.setitimer(signal.ITIMER_REAL, 0)
-                files.release_locks()  # what the command line does on its way out
+    def take_and_release_until_stopped():
+        try:
+            while True:  # the stop lands anywhere in the cycle of taking and releasing the lock
+                files.hold_lock(tmp_path / "r", "run r")
+                files.release_locks()
+        finally:
+            files.release_locks()  # what the command line does on its way out
             assert not list(tmp_path.iterdir())
-    finally:
-        signal.signal(signal.SIGALRM, previous)
-    assert interrupted == 200
+
+    assert interrupt_at_random(take_and_release_until_stopped, 200, 0.001, seed=1) == 200
 
 
 #: Start-up code that sends the process a hang-up just as it lets go of a lock (the command's last steps).
