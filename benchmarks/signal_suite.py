@@ -47,6 +47,7 @@ COMMANDS = {
                  "--max-evals", "200", "--workers", "2", "--out", "OUT"],
     "calibrate": ["calibrate", *DIE, "--free", "restitution", "--sims-per-eval", "400", "--max-evals", "200",
                   "--workers", "2", "--name", "c", "--out", "OUT"],
+    "design": ["design", "1,2,3,4,5,6", "--workers", "2", "--out", "OUT"],
     "stl": ["stl", "fudge-gem", "--out", "OUT"],
     "net": ["net", "fudge-gem", "--out", "OUT"],
 }  # fmt: skip
@@ -151,7 +152,7 @@ def trial(command: str, signum: int, to_group: bool, delay: float) -> str:
         if not in_place and proc.returncode not in (0, 130):  # before diefab's first line: the interpreter's start-up
             return f"early (exit {proc.returncode}: {' | '.join(lines[-2:])[-200:]})"
         if done and proc.returncode == 0:
-            return "finished"
+            return "finished (it had reported; the signal met its teardown)"
         if "Traceback" in err:
             return f"traceback ({' | '.join(lines[-3:])[-300:]})"
         if orphaned:
