@@ -22,7 +22,8 @@ handlers are in place once the process catches SIGTERM and SIGHUP, which the
 interpreter alone leaves at their defaults; a finished command ignores them.
 Where /proc is missing no trial is classified early or finished-in-teardown.
 
-Run:  python benchmarks/signal_suite.py [TRIALS] [SEED]   (default 120 trials, seed 0)
+Run:  python benchmarks/signal_suite.py [TRIALS] [SEED] [--commands stl,net] [--between EARLIEST LATEST]
+      (default 120 trials, seed 0, every command, signals at 0 to 6 s)
 The test suite runs the same trials, fewer of them (tests/test_signal_suite.py).
 """
 
@@ -178,6 +179,7 @@ def run_trials(n: int, seed: int = 0, commands=tuple(COMMANDS), earliest: float 
         to_group, delay = rng.random() < 0.5, rng.uniform(earliest, latest)
         outcome = trial(command, signum, to_group, delay)
         counts[outcome.split(" (")[0]] += 1
+        counts["teardown"] += "teardown" in outcome
         if outcome.startswith(("unclean", "traceback", "early")):
             counts[outcome] += 0  # keep the first words of each unclean end for the report
             print(f"  {command} {signal.Signals(signum).name} at {delay:.2f} s: {outcome}", file=sys.stderr)
@@ -185,15 +187,30 @@ def run_trials(n: int, seed: int = 0, commands=tuple(COMMANDS), earliest: float 
 
 
 def main() -> None:
-    n = int(sys.argv[1]) if len(sys.argv) > 1 else 120
-    seed = int(sys.argv[2]) if len(sys.argv) > 2 else 0
+    import argparse
+
+    parser = argparse.ArgumentParser(description="Stop signals at random moments in the long commands.")
+    parser.add_argument("trials", type=int, nargs="?", default=120)
+    parser.add_argument("seed", type=int, nargs="?", default=0)
+    parser.add_argument("--commands", default=",".join(COMMANDS), help="comma-separated, of: " + ", ".join(COMMANDS))
+    parser.add_argument("--between", type=float, nargs=2, default=(0.0, LATEST), metavar=("EARLIEST", "LATEST"),
+                        help="seconds after the start within which each signal is sent")  # fmt: skip
+    args = parser.parse_args()
+    commands = tuple(args.commands.split(","))
+    unknown = set(commands) - set(COMMANDS)
+    if unknown:
+        parser.error(f"unknown command(s) {', '.join(sorted(unknown))}")
+    earliest, latest = args.between
     started = time.perf_counter()
-    counts = run_trials(n, seed)
-    signalled = n - counts["finished"] - counts["early"]
-    print(f"signal suite: {n} trials (seed {seed}), {os.cpu_count()} cores, commands {', '.join(COMMANDS)}; "
-          f"signals SIGINT/SIGTERM/SIGHUP to the process or its group at 0-{LATEST:g} s")  # fmt: skip
+    counts = run_trials(args.trials, args.seed, commands, earliest, latest)
+    signalled = args.trials - counts["finished"] - counts["early"]
+    print(f"signal suite: {args.trials} trials (seed {args.seed}), {os.cpu_count()} cores, load average "
+          f"{os.getloadavg()[0]:.1f}, commands {', '.join(commands)}; signals SIGINT/SIGTERM/SIGHUP to the process "
+          f"or its group at {earliest:g}-{latest:g} s")  # fmt: skip
     for outcome in ("clean", "finished", "early", "lost", "traceback", "orphan", "unclean"):
         print(f"  {outcome:10s} {counts[outcome]}")
+    if counts["teardown"]:
+        print(f"  ({counts['teardown']} of the finished had reported and met the signal in their teardown)")
     if signalled:
         print(f"clean: {counts['clean']} of {signalled} signalled runs ({100 * counts['clean'] / signalled:.1f} %); "
               f"{time.perf_counter() - started:.0f} s")  # fmt: skip

@@ -134,3 +134,33 @@ def test_a_stop_as_the_command_lets_go_of_its_locks_is_one_line_and_no_lock_file
     assert proc.returncode == 130 and lines[-1] == "diefab: interrupted" and "Traceback" not in proc.stderr, lines
     assert "needs a terminal" in lines[0]  # the command's own end came first: it took its lock, then refused
     assert not list(out.iterdir())  # the lock file went with the lock
+
+
+#: Start-up code that makes a stop land in code run by ``exec`` (as the methods a dataclass generates are).
+STOP_INSIDE_EXEC = textwrap.dedent(
+    """
+    import diefab.dice.design as _design
+
+    _list = _design.list_templates
+
+
+    def list_templates():
+        exec("import os, signal\\nos.kill(os.getpid(), signal.SIGTERM)\\nfor _ in range(100_000):\\n    pass\\n")
+        return _list()
+
+
+    _design.list_templates = list_templates
+    """
+)
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="signals")
+def test_a_stop_that_lands_in_executed_code_ends_in_exit_130(tmp_path):
+    # the interpreter remembers a KeyboardInterrupt that ended a string given to exec, caught or not, and a
+    # ``python -m`` run that ends with it remembered dies by SIGINT instead of exiting with its status
+    (tmp_path / "sitecustomize.py").write_text(STOP_INSIDE_EXEC)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), str(ROOT)])}
+    proc = subprocess.run([sys.executable, "-m", "diefab", "templates"], env=env, text=True, capture_output=True,
+                          timeout=120)  # fmt: skip
+    lines = [line for line in proc.stderr.splitlines() if line]  # click starts the line after a ^C on a new one
+    assert proc.returncode == 130 and lines == ["diefab: interrupted"], (proc.returncode, proc.stderr)

@@ -1,7 +1,7 @@
 """Stop signals of the command line: Ctrl-C, SIGTERM and SIGHUP end a command cleanly.
 
-A stop signal raises :class:`KeyboardInterrupt` in the main thread, and is
-also *noted*.  The note is what makes a stop impossible to lose: Python
+A stop signal raises :class:`Stopped` (a :class:`KeyboardInterrupt`) in the
+main thread, and is also *noted*.  The note is what makes a stop impossible to lose: Python
 code that catches ``BaseException`` (an optional import guarded that way, a
 callback whose errors are ignored) can swallow the exception, but not the
 note, and :func:`check_stop` raises again at the next safe point (before a
@@ -32,7 +32,7 @@ import signal
 import sys
 import threading
 
-__all__ = ["STOP_SIGNALS", "check_stop", "install", "install_early", "reset", "restore", "stop_requested"]
+__all__ = ["STOP_SIGNALS", "Stopped", "check_stop", "install", "install_early", "reset", "restore", "stop_requested"]
 
 #: The signals that stop a command.
 STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
@@ -40,6 +40,17 @@ STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SI
 STOPPED = 130
 
 _noted: list[int] = []
+
+
+class Stopped(KeyboardInterrupt):
+    """A stop signal, raised in the main thread; caught as the :class:`KeyboardInterrupt` it is.
+
+    A subclass, not ``KeyboardInterrupt`` itself: CPython remembers a
+    ``KeyboardInterrupt`` of exactly that type that ends code run by ``exec``
+    on a string (the methods a dataclass or named tuple generates), even when
+    it is caught, and a ``python -m`` program that ends with one remembered
+    dies by SIGINT instead of exiting with its own status.
+    """
 
 
 def stop_requested() -> int | None:
@@ -53,14 +64,14 @@ def reset() -> None:
 
 
 def check_stop() -> None:
-    """Raise :class:`KeyboardInterrupt` if a stop signal was received (and perhaps swallowed)."""
+    """Raise :class:`Stopped` if a stop signal was received (and perhaps swallowed)."""
     if _noted:
-        raise KeyboardInterrupt
+        raise Stopped
 
 
 def _interrupt(signum, frame) -> None:
     _noted.append(signum)
-    raise KeyboardInterrupt
+    raise Stopped
 
 
 def _exit_now(signum, frame) -> None:
@@ -75,7 +86,7 @@ def _ours(handler) -> bool:
 
 
 def install() -> dict[int, object]:
-    """Make each stop signal note itself and raise :class:`KeyboardInterrupt`; return the previous handlers.
+    """Make each stop signal note itself and raise :class:`Stopped`; return the previous handlers.
 
     A signal whose handler was set by someone else (ignored by ``nohup``,
     say) is left alone.  Only in the main thread.
