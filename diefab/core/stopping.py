@@ -1,12 +1,12 @@
 """Stop signals of the command line: Ctrl-C, SIGTERM and SIGHUP end a command cleanly.
 
 A stop signal raises :class:`Stopped` (a :class:`KeyboardInterrupt`) in the
-main thread, and is also *noted*.  The note is what makes a stop impossible to lose: Python
-code that catches ``BaseException`` (an optional import guarded that way, a
-callback whose errors are ignored) can swallow the exception, but not the
-note, and :func:`check_stop` raises again at the next safe point (before a
-file is written, between batches of drops, before the command reports
-success).
+main thread, and is also *noted*.  The note is what makes a stop impossible
+to lose: Python code that catches ``BaseException`` (an optional import
+guarded that way, a callback whose errors are ignored) can swallow the
+exception, but not the note, and :func:`check_stop` raises again at the
+next safe point (before a file is written, between batches of drops, before
+the command reports success).
 
 Before the package's heavy imports run, :func:`install_early` makes a stop
 end the process at once with one line and exit status 130: nothing has been
