@@ -201,7 +201,7 @@ def main() -> int:
     full = fit_index(dice, probs, list(range(len(dice))), args.prior, vigor, 1.0)
     print(f"  in-sample (all dice): vigor {vigor[full]:g}, mean TVD {grid_tvd[:, full].mean():.4f}")
     goal(dice, cols, ref, noise, default)
-    throw_or_table(dice, sims, vigor, probs, grid_tvd, ref, noise, default, args.prior)
+    throw_or_table(dice, sims, vigor, probs, grid_tvd, ref, noise, default, args.prior, args)
     if args.physics_drops:
         table_physics(dice, sims, args, ref, noise)
     print(f"\n{time.perf_counter() - started:.0f} s in all; {sims.dropped} drops simulated now "
@@ -269,7 +269,7 @@ def printed_table_cv(dice, sims, noise) -> None:
               f"{score(i, shipped):.4f} (noise {noise[i]:.4f})")  # fmt: skip
 
 
-def throw_or_table(dice, sims, vigor, probs, grid_tvd, ref, noise, default, prior_sd) -> None:
+def throw_or_table(dice, sims, vigor, probs, grid_tvd, ref, noise, default, prior_sd, args) -> None:
     """Cross-validation over the union of the vigor grid (capture 0) and the capture grid (the default throw).
 
     Candidates have coordinates (vigor, capture); the prior is normal toward the
@@ -323,6 +323,23 @@ def throw_or_table(dice, sims, vigor, probs, grid_tvd, ref, noise, default, prio
         print(f"  {how} (vigor, capture) per die: "
               + ", ".join(f"{d.name} ({x[idx[i]][0]:g}, {x[idx[i]][1]:g})" for i, d in enumerate(dice)))  # fmt: skip
     goal(dice, cols, ref, noise, default)
+    if not args.score_drops:
+        return
+
+    # the same choices, each held-out die and the default scored on fresh drops (the grid's 400 add noise)
+    def fresh(i: int, k: int) -> float:
+        v, c = x[k]
+        s = PhysicsSettings(capture_energy=float(c)) if c > 0 else throw_settings(float(v))
+        counts = sims.counts_at(dice[i], s, args.score_drops, args.score_seed)
+        return value_tvd(dice[i], counts / max(counts.sum(), 1))
+
+    fresh_default = [fresh(i, default_index) for i in range(n)]
+    cols = {"default": fresh_default}
+    for how, idx in (("loo", loo), ("lofo", lofo), ("loo-surface", loo_s), ("lofo-surface", lofo_s)):
+        cols[how] = [fresh(i, idx[i]) for i in range(n)]
+    print(f"\n3'. The same choices scored on {args.score_drops} fresh drops (seed {args.score_seed})")
+    table(dice, {**cols, **ref}, noise)
+    goal(dice, cols, ref, noise, fresh_default)
 
 
 def goal(dice, cols, ref, noise, default) -> None:
