@@ -1,6 +1,7 @@
 """Held-out prediction of real dice: every shipped physics profile, and a throw fitted by cross-validation.
 
     nice -n 10 python benchmarks/bench_heldout.py [--drops 400] [--seed 1] [--workers 2] [--prior 0.5]
+        [--physics-drops 1000] [--score-drops 3000]
 
 The dice: the paper's die as made (Table 2) and every die of
 ``../shared/realrolls`` (:func:`diefab.search.fidelity.load_real_dice`), in four
@@ -33,7 +34,14 @@ stone (its own surface).
    capture grid (vigor 1), and once more with the fit restricted to dice
    rolled on the held-out die's own surface (:data:`SURFACE`; no other die
    on it: the default physics), the columns ``loo-surface`` and
-   ``lofo-surface``.
+   ``lofo-surface``; then (3') the same choices, each held-out die and the
+   default scored on ``--score-drops`` fresh drops (seed ``--score-seed``),
+   so that the simulation's own noise is small beside the real rolls'.
+4. **Throw, table and rounded edges** (:func:`table_physics`): the throws
+   0, 0.5 and 1, each alone and with rolling friction, a soft table or
+   rounded edges, and the capture grid, cross-validated the same way
+   (:mod:`diefab.search.crossval`) and scored on fresh drops, beside what a
+   perfect model scores at that many drops (``perfect``).
 
 Printed: TVD to the real frequencies per die (mirror-image outcomes up to
 relabelling), the sampling noise of the real counts (the TVD a perfect
