@@ -7,7 +7,7 @@ import pytest
 
 from diefab import DesignError, load_design, value_probabilities
 from diefab.studio.state import Session, evaluate, face_colors, parameters
-from diefab.studio.view import face_frames, label_quad, net_svg
+from diefab.studio.view import die_data, face_at, label_quad, net_svg
 
 
 def test_evaluation_is_the_library_fast_model():
@@ -63,19 +63,30 @@ def test_colors_darken_with_probability():
     assert lum[0] > lum[1] > lum[2]
 
 
-def test_face_frames_place_every_vertex():
+def test_die_data_draws_every_face_with_its_label_inside_it():
     poly = load_design("fudge-gem").polyhedron
-    for k, frame in enumerate(face_frames(poly)):
-        rot = np.array(frame["rotation"])
-        np.testing.assert_allclose(rot.T @ rot, np.eye(3), atol=1e-12)
-        assert np.linalg.det(rot) == pytest.approx(1.0)
-        xy = np.array(frame["outline"])
-        placed = frame["center"] + np.column_stack([xy, np.zeros(len(xy))]) @ rot.T
-        np.testing.assert_allclose(placed, poly.vertices[np.asarray(poly.faces[k])], atol=1e-12)
-        quad = np.array(label_quad(poly, k, 0.0)).reshape(4, 3)
-        # the label lies in the face's plane, inside the face
-        np.testing.assert_allclose(quad @ poly.normals[k], poly.offsets[k], atol=1e-12)
-        assert np.all(poly.normals @ quad.T <= poly.offsets[:, None] + 1e-12)
+    m = len(poly.faces)
+    data = die_data(poly, ["#fff"] * m, [str(k) for k in range(m)], lift=0.0)
+    v = np.array(data["vertices"])
+    for k, face in enumerate(data["faces"]):
+        pts = v[face]
+        # every face lies in its plane and winds counter-clockwise seen from outside
+        np.testing.assert_allclose(pts @ poly.normals[k], poly.offsets[k], atol=1e-5)
+        assert np.cross(pts[1] - pts[0], pts[2] - pts[0]) @ poly.normals[k] > 0
+        quad = np.array(data["quads"][k])
+        # the label lies in the face's plane, inside the face, and is upright: top edge above the bottom one
+        np.testing.assert_allclose(quad @ poly.normals[k], poly.offsets[k], atol=1e-5)
+        assert np.all(poly.normals @ quad.T <= poly.offsets[:, None] + 1e-5)
+        up = label_quad(poly, k, 0.0)
+        np.testing.assert_allclose(quad, np.array(up).reshape(4, 3), atol=1e-5)
+
+
+def test_a_click_finds_the_face_under_it():
+    poly = load_design("fudge-gem").polyhedron
+    for k, face in enumerate(poly.faces):
+        centroid = poly.vertices[np.asarray(face)].mean(axis=0)
+        assert face_at(poly, centroid) == k
+        assert face_at(poly, centroid - 0.01 * poly.normals[k]) == k  # an engraved label's floor
 
 
 def test_net_svg_has_one_polygon_per_face():
