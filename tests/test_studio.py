@@ -156,7 +156,6 @@ def test_template_slider_chart_margins_undo(page):
     before = _wait_state(page, lambda s: s["name"] == "fudge-gem")
     bars_before = _bars(page)
     assert len(before["probabilities"]) == 9 and abs(sum(before["probabilities"]) - 1) < 1e-9
-    _shot(page, "main")
 
     page.locator('.studio-param-a [tabindex="0"]').first.focus()
     page.evaluate("""() => {
@@ -210,6 +209,9 @@ def test_net_linked_to_die(page):
     page.wait_for_selector(".studio-net .net-face", timeout=60_000)
     n = page.locator(".studio-net .net-face").count()
     assert n == len(_state(page)["faces"])
+    # once the die stays the same, it is shown as printed: its solid built in a worker, the values engraved
+    _wait_text(page, ".studio-made-note", r"^$", 240)
+    _shot(page, "main")
     page.locator(".studio-net .net-face").first.hover()
     page.wait_for_timeout(500)
     _shot(page, "net", full=True)

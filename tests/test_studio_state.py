@@ -135,3 +135,93 @@ def test_studio_command_refuses_bad_input_in_one_line(bad, tmp_path):
         held.listen()
         port = held.getsockname()[1]
         assert "cannot serve on 127.0.0.1" in bad("studio", "d6", "--no-browser", "--port", port, "--out", tmp_path)
+
+
+def test_provisional_evaluation_is_the_solid_body_of_the_same_shape():
+    from dataclasses import replace
+
+    from diefab.made.fill import Fill
+    from diefab.studio.state import made_body_is_slow, provisional_evaluation
+
+    paper = replace(load_design("fudge-gem"), fill=Fill("paper"))
+    assert made_body_is_slow(paper) and not made_body_is_slow(load_design("fudge-gem"))
+    ev = provisional_evaluation(paper)
+    assert ev["provisional"] and ev["fill"] == "paper"
+    solid = replace(paper, fill=Fill())
+    np.testing.assert_allclose(ev["probabilities"], value_probabilities(solid, "fast"), atol=1e-12)
+    np.testing.assert_allclose([f["margin"] for f in ev["faces"]], solid.margins())
+    assert not evaluate(solid)["provisional"]
+
+
+def test_evaluator_worker_gives_the_library_evaluation_and_stops():
+    from dataclasses import replace
+
+    from diefab.core.errors import DiefabError
+    from diefab.made.fill import Fill
+    from diefab.studio.jobs import Evaluator
+
+    printed = replace(load_design("d6"), fill=Fill("print", infill=0.2))
+    worker = Evaluator()
+    try:
+        ev = worker.evaluate(printed)
+        np.testing.assert_allclose(ev["probabilities"], evaluate(printed)["probabilities"], atol=1e-12)
+        np.testing.assert_allclose([f["margin"] for f in ev["faces"]], printed.margins(), atol=1e-12)
+        with pytest.raises(DiefabError, match="internal error"):  # not a design: one line, and the worker lives on
+            worker.evaluate(None)
+        assert worker.evaluate(printed)["probabilities"] == ev["probabilities"]
+    finally:
+        worker.stop()
+    assert not worker.process.is_alive()
+
+
+def test_made_mesh_gives_each_triangle_its_face():
+    from diefab.studio.view import made_mesh
+
+    poly = load_design("fudge-gem").polyhedron
+    triangles, owner = [], []
+    for k, face in enumerate(poly.faces):
+        for i in range(1, len(face) - 1):
+            triangles.append([face[0], face[i], face[i + 1]])
+            owner.append(k)
+    engraved = np.zeros(len(triangles), bool)
+    data = made_mesh(poly, poly.vertices, np.array(triangles), engraved)
+    assert data["face_of"] == owner
+    # a triangle sunk into a face (an engraving's floor) still belongs to that face
+    k = 3
+    floor = poly.vertices[np.asarray(poly.faces[k][:3])] * 0.9 + 0.1 * poly.vertices[poly.faces[k]].mean(axis=0)
+    floor = floor - 0.02 * poly.normals[k]
+    sunk = made_mesh(poly, floor, np.array([[0, 1, 2]]), np.array([True]))
+    assert sunk["face_of"] == [k] and sunk["engraved"] == [1]
+
+
+def test_charts_and_live_verdict():
+    from diefab.studio.chart import counts_options, live_verdict, margin_rows, validation_options
+
+    d = load_design("d6")
+    counts, sequential, plain = live_verdict(d, [1, 1, 6, 7], delta=0.03)  # 7 is not a value of the die: left out
+    assert counts == [2, 0, 0, 0, 0, 1]
+    assert sequential.startswith("3 rolls: TVD") and plain
+    opts = counts_options(["1", "2", "3", "4", "5", "6"], counts, [1 / 6] * 6)
+    assert sum(opts["series"][0]["data"]) == pytest.approx(1.0)
+    assert live_verdict(d, [], delta=0.03)[2] == ""
+    r = {"observed": [0.5, 0.5], "target": [0.5, 0.5], "intervals": [[0.4, 0.6], [0.3, 0.7]]}
+    series = {s["name"]: s["data"] for s in validation_options(["1", "2"], r)["series"]}
+    assert series["interval low"] == [0.4, 0.3] and series["interval high"] == [0.6, 0.7]
+    rows = margin_rows(evaluate(d))
+    assert [row["state"] for row in rows] == ["stable"] * 6
+
+
+def test_upload_checks(tmp_path):
+    from diefab.dice.design import design_to_toml
+    from diefab.studio.files import MAX_UPLOAD, parse_upload
+
+    d6 = load_design("d6")
+    text = design_to_toml(d6).encode()
+    assert parse_upload(text, "d6.toml", tmp_path).name == d6.name
+    with pytest.raises(DesignError, match="larger than"):
+        parse_upload(b" " * (MAX_UPLOAD + 1), "big.toml", tmp_path)
+    with pytest.raises(DesignError, match="UTF-8"):
+        parse_upload(b"\xff\xfe", "bin.toml", tmp_path)
+    outside = b'name = "m"\nfamily = "mesh"\nmesh = "/etc/passwd"\nvalues = {}\n'
+    with pytest.raises(DesignError):
+        parse_upload(outside, "m.toml", tmp_path)

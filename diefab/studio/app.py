@@ -1,8 +1,10 @@
 """The studio's web page (NiceGUI): its layout, the live sliders and how an edit reaches the page.
 
 One :class:`Studio` per open page.  An edit is evaluated at once and drawn
-in three messages, most wanted first: the chart, then the numbers (status,
-margins table), then the 3D die.  A die whose made body takes long to
+in three messages, most wanted first: the chart (straight to ECharts), then
+the numbers (status, margins table), then the 3D die, once the edits pause
+for :data:`DIE_PAUSE` (redrawing it on every step of a dragged slider would
+hold up the next step's chart).  A die whose made body takes long to
 evaluate (paper, print) is drawn first as its solid body, marked
 provisional, while a worker process (:class:`~diefab.studio.jobs.Evaluator`)
 computes the made body; its result replaces the stand-in if the die has not
@@ -13,6 +15,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import math
 import time
 from pathlib import Path
 from typing import Any
@@ -38,6 +41,9 @@ FILL_SLIDERS = {
               "layer_mm": ("layer height, mm", 0.08, 0.32, 0.02), "nozzle_mm": ("nozzle, mm", 0.2, 0.8, 0.05)},
 }  # fmt: skip
 
+#: The 3D die is redrawn once edits pause this long, seconds: while a slider is dragged the chart goes first.
+DIE_PAUSE = 0.3
+
 
 class Studio:
     """The page of one browser tab."""
@@ -53,6 +59,8 @@ class Studio:
         self.evaluator: Evaluator | None = None
         self._made_running = False
         self._stopped = False
+        self._chart_shown = False
+        self._last_edit = -math.inf
         self._edit_started: float | None = None
         self.die_view = DieView(self.select_face, self.session.is_current)
         self.make = MakePanel(self)
@@ -143,6 +151,7 @@ class Studio:
     # ------------------------------------------------------------------ edits
     def edit(self, key: tuple, rebuild: bool = False, **changes) -> None:
         self._edit_started = time.perf_counter()
+        self._last_edit = time.monotonic()
         try:
             self.session.edit(key=key, **changes)
         except DiefabError as exc:
@@ -267,10 +276,15 @@ class Studio:
             return
         self.evaluation = ev
         name = "solid body (the made body is being computed)" if ev["provisional"] else "fast model"
+        options = distribution_options(ev["values"], ev["probabilities"], ev["target"], name=name,
+                                       provisional=ev["provisional"])  # fmt: skip
         self.chart.options.clear()
-        self.chart.options.update(distribution_options(ev["values"], ev["probabilities"], ev["target"], name=name,
-                                                       provisional=ev["provisional"]))  # fmt: skip
-        self.chart.update()
+        self.chart.options.update(options)  # what the page is built from if the browser reconnects
+        if self._chart_shown:  # straight to ECharts: no re-render of the page's other elements
+            self.chart.run_chart_method("setOption", options, {"notMerge": True})
+        else:
+            self.chart.update()
+            self._chart_shown = True
         started, self._edit_started = self._edit_started, None
         server_ms = None if started is None else 1000 * (time.perf_counter() - started)
         await self._flush()
@@ -294,6 +308,10 @@ class Studio:
         await self._flush()
         if generation != self.generation:
             return
+        while (wait := self._last_edit + DIE_PAUSE - time.monotonic()) > 0:  # a slider is being dragged
+            await asyncio.sleep(wait)
+            if generation != self.generation:
+                return
         self.die_view.draw(design, ev)
         if self.selected:
             self.die_view.show_face(self.selected)

@@ -10,6 +10,7 @@
 import { THREE } from "nicegui-scene";
 
 const LABEL_PX = 128;
+const WHITE = new THREE.Color("#ffffff");
 
 function labelTexture(text) {
   const canvas = document.createElement("canvas");
@@ -111,7 +112,12 @@ export default class Die {
       const c = new THREE.Color();
       this.faceOf.forEach((k, t) => {
         c.set(colors[k]);
-        if (this.engraved[t]) c.multiplyScalar(0.35); // the label's walls and floor, in shadow as on a real die
+        if (this.engraved[t]) {
+          // the label's walls and floor: darker than a light face, lighter than a dark one, so the value reads
+          const luminance = 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
+          if (luminance > 0.12) c.multiplyScalar(0.3);
+          else c.lerp(WHITE, 0.55);
+        }
         for (let j = 0; j < 3; j++) this.meshColors.set([c.r, c.g, c.b], 9 * t + 3 * j);
       });
       this.body.geometry.attributes.color.needsUpdate = true;

@@ -112,8 +112,10 @@ class DieView:
         elif colors != self._colors:
             self.die.paint(colors)
         self._shape, self._colors = shape, colors
-        self.made_note.set_text("" if mesh is not None or not self._wanted(design) else "(flat faces while it changes)")
-        if mesh is None and self._wanted(design):
+        self.as_made.set_visibility(design.fill.kind != "paper")  # a paper die's values are printed
+        waiting = mesh is None and self._wanted(design)
+        self.made_note.set_text("(flat faces until the solid is built)" if waiting else "")
+        if waiting:
             asyncio.get_event_loop().create_task(self._build_made(design))
         top = max((f["probability"] for f in ev["faces"]), default=0.0)
         stops = ", ".join(f"rgb{c} {100 * t:.0f}%" for t, c in SCALE)
