@@ -57,7 +57,7 @@ from diefab.search.likelihood import SMOOTHING, deviance, die_report, simulate_d
 from diefab.search.parameters import DEFAULT_FREE, MAX_GRID, PARAMETERS, Parameter, parameter_value, settings_at
 from diefab.search.realdie import CalibrationError, RealDie, real_die, realrolls_die
 from diefab.search.runlog import RunLog
-from diefab.search.simopt import RUN_FORMAT, RunError, check_budget
+from diefab.search.runspec import RUN_FORMAT, RunError, check_budget
 from diefab.search.uncertainty import curvature, grid_interval
 
 __all__ = [
@@ -97,7 +97,7 @@ class CalibrationSpec:
     `max_sims`, `method`, `sigma0`) mean what they mean in
     :class:`diefab.search.simopt.RunSpec`; `method` may also be ``"grid"``:
     `grid_points` evenly spaced points per parameter in the unit cube,
-    narrowed by successive halving (:func:`diefab.search.simopt._run_grid`).
+    narrowed by successive halving (:func:`diefab.search.simmethods.run_grid`).
     `bounds` maps the unit cube to the settings and `physics` holds the
     settings that are not fitted.
     """
