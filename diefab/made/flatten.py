@@ -19,7 +19,9 @@ import numpy as np
 from diefab.geometry.flat import overlap, stack_polygons
 from diefab.geometry.polyhedron import Polyhedron
 
-__all__ = ["count_overlaps", "face_frames", "hinges_of", "homogeneous", "place_trees", "rigid", "rooted"]
+__all__ = [
+    "count_overlaps", "face_frames", "hinges_of", "homogeneous", "place_trees", "rigid", "rooted", "tree_parents",
+]  # fmt: skip
 
 
 def face_frames(poly: Polyhedron, scale: float) -> list[np.ndarray]:
@@ -85,18 +87,54 @@ def homogeneous(local: list[np.ndarray]) -> np.ndarray:
     return np.concatenate([flat, np.ones((*flat.shape[:2], 1))], axis=2)
 
 
-def place_trees(trees: list[tuple[int, ...]], poly, hinges, padded) -> tuple[np.ndarray, list]:
-    """(T, m, K, 2) face polygons of every tree's layout, and each tree's rooting."""
+def tree_parents(poly: Polyhedron, trees: list[tuple[int, ...]], root: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Parent face and hinge (edge, direction) of every face in each spanning tree rooted at `root`.
+
+    The same as :func:`rooted` for every tree (a tree has one parent per
+    face), grown one level at a time over all trees at once.
+
+    Returns
+    -------
+    parent : (T, m) int
+        The parent face; the root is its own parent.
+    hinge : (T, m, 2) int
+        ``(edge, 0)`` where the face is ``edge_faces[edge, 1]`` (laid out in
+        its parent ``edge_faces[edge, 0]``'s frame by ``hinges[edge, 0]``),
+        ``(edge, 1)`` the other way round; ``(-1, -1)`` at the root.
+    """
+    n, m = len(trees), len(poly.faces)
+    parent = np.full((n, m), -1, dtype=np.intp)
+    parent[:, root] = root
+    hinge = np.full((n, m, 2), -1, dtype=np.intp)
+    if n == 0 or m == 1:
+        return parent, hinge
+    edges = np.asarray(trees, dtype=np.intp)
+    a, b = poly.edge_faces[edges, 0], poly.edge_faces[edges, 1]
+    rows = np.broadcast_to(np.arange(n)[:, None], edges.shape)
+    pending = np.ones(edges.shape, dtype=bool)
+    while pending.any():
+        seen_a, seen_b = parent[rows, a] >= 0, parent[rows, b] >= 0
+        grown = False
+        for child, par, d, new in ((b, a, 0, seen_a & ~seen_b), (a, b, 1, seen_b & ~seen_a)):
+            new &= pending
+            if new.any():
+                t, c = rows[new], child[new]
+                parent[t, c] = par[new]
+                hinge[t, c, 0], hinge[t, c, 1] = edges[new], d
+                pending &= ~new
+                grown = True
+        if not grown:  # not spanning trees: the faces out of reach keep parent -1
+            break
+    return parent, hinge
+
+
+def place_trees(trees: list[tuple[int, ...]], poly, hinges, padded) -> tuple[np.ndarray, np.ndarray]:
+    """(T, m, K, 2) face polygons of every tree's layout, and (T, m) each face's parent in its tree (root 0)."""
     m = len(poly.faces)
+    par, hinge = tree_parents(poly, trees)
     rel = np.tile(np.eye(3), (len(trees), m, 1, 1))
-    par = np.empty((len(trees), m), dtype=np.intp)
-    roots = []
-    for t, tree in enumerate(trees):
-        parent, hinge, order = rooted(poly, tree)
-        roots.append((parent, hinge, order))
-        par[t] = parent
-        ok = hinge[:, 0] >= 0
-        rel[t, ok] = hinges[hinge[ok, 0], hinge[ok, 1]]
+    ok = hinge[..., 0] >= 0
+    rel[ok] = hinges[hinge[ok][:, 0], hinge[ok][:, 1]]
     # pointer jumping: world[f] is the product of the hinges from the root down to f; each pass doubles
     # the stretch of path it covers (the root's own transform is the identity, and its parent itself)
     world = rel.copy()
@@ -105,7 +143,7 @@ def place_trees(trees: list[tuple[int, ...]], poly, hinges, padded) -> tuple[np.
     for _ in range(max(1, int(np.ceil(np.log2(max(m, 2)))))):
         world = world[rows, up] @ world
         up = up[rows, up]
-    return np.einsum("tmij,mkj->tmki", world, padded)[..., :2], roots
+    return np.einsum("tmij,mkj->tmki", world, padded)[..., :2], par
 
 
 def count_overlaps(world: np.ndarray, sizes: list[int]) -> np.ndarray:

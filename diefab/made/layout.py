@@ -41,7 +41,7 @@ from diefab.geometry.flat import convex_hull, extents, fit_box, overlap, stack_p
 from diefab.geometry.polyhedron import Polyhedron
 from diefab.geometry.symmetry import Symmetries, symmetries
 from diefab.geometry.trees import all_trees, heuristic_trees, spanning_tree_count
-from diefab.made.flatten import count_overlaps, face_frames, hinges_of, homogeneous, place_trees
+from diefab.made.flatten import count_overlaps, face_frames, hinges_of, homogeneous, place_trees, rooted
 from diefab.made.tabs import Grid, Tabs, cell_size, cut_copies, place_tabs, tab_offset
 
 __all__ = ["NetLayout", "lay_out"]
@@ -60,6 +60,8 @@ MAX_FINALISTS = 25
 #: (a tree's pieces cost time in proportion to the faces).
 SPLIT_TREES = 12
 SPLIT_FACES = 2400
+#: Trees whose faces are checked for overlaps at a time, as the search comes to them.
+CLASH_BATCH = 64
 
 
 @dataclass
@@ -145,8 +147,8 @@ def lay_out(
     group = symmetries(poly)
     keeps = _tree_symmetries(group, trees)  # (T, g): which symmetries map each tree onto itself
     n_sym = keeps.sum(axis=1)
-    world, roots = place_trees(trees, poly, hinges, padded)
-    n_clash = count_overlaps(world, [len(f) for f in poly.faces])
+    world, parents = place_trees(trees, poly, hinges, padded)
+    sizes = [len(f) for f in poly.faces]
     est = np.empty(len(trees))
     fits_page = np.empty(len(trees), dtype=bool)
     angles = np.deg2rad(np.arange(0.0, 180.0, 3.0))
@@ -156,22 +158,29 @@ def lay_out(
         # the faces alone must fit, allowing for the coarse grid
         fits_page[start : start + 512] = ((w <= printable[0] * 1.03) & (h <= printable[1] * 1.03)).any(axis=1)
 
-    stats = {"method": method, "trees": len(trees), "spanning_trees": count, "overlap_free": int((n_clash == 0).sum()),
-             "symmetries": len(group)}  # fmt: skip
+    stats = {"method": method, "trees": len(trees), "spanning_trees": count, "symmetries": len(group)}
     best: NetLayout | None = None
     tried: dict[int, int] = {}  # finalists per number of symmetries kept
-    # the trees that keep the most symmetries first, each group smallest first
-    order = np.lexsort((est, -n_sym, n_clash > 0))
-    for t in order:
+    # the trees that keep the most symmetries first, each group smallest first; a tree whose faces overlap is
+    # skipped, and its faces are checked only when it comes up (in batches along this order)
+    order = np.lexsort((est, -n_sym))
+    n_clash = np.full(len(trees), -1, dtype=np.intp)  # -1: not counted yet
+    for i, t in enumerate(order):
         if sum(tried.values()) >= 2 * MAX_FINALISTS:
             break
-        if n_clash[t] or not fits_page[t] or tried.get(n_sym[t], 0) >= MAX_FINALISTS:
+        if not fits_page[t] or tried.get(n_sym[t], 0) >= MAX_FINALISTS:
             continue
         if best is not None and est[t] * (1 - 0.03) > best.area and best.offset <= tol.NET_TAB_OFFSET_MM:
             continue
+        if n_clash[t] < 0:
+            batch = order[i : i + CLASH_BATCH]
+            batch = batch[fits_page[batch] & (n_clash[batch] < 0)]
+            n_clash[batch] = count_overlaps(world[batch], sizes)
+        if n_clash[t]:
+            continue
         tried[n_sym[t]] = tried.get(n_sym[t], 0) + 1
         layout = _single_piece(
-            poly, trees[t], world[t], roots[t], tab_width, printable, group, group.subgroup(keeps[t]), mm_per_unit
+            poly, trees[t], world[t], parents[t], tab_width, printable, group, group.subgroup(keeps[t]), mm_per_unit
         )
         if layout is not None and (best is None or layout.key < best.key):
             best = layout
@@ -181,8 +190,10 @@ def lay_out(
     if best is None:
         # split: grow pieces along the trees with the smallest footprint, keep the fewest pieces
         n_split = max(1, min(SPLIT_TREES, int(SPLIT_FACES / m))) if search else 1
+        unknown = np.flatnonzero(n_clash < 0)
+        n_clash[unknown] = count_overlaps(world[unknown], sizes)
         for t in np.argsort(n_clash * 1e12 + est, kind="stable")[:n_split]:
-            layout = _split(poly, trees[t], world[t], roots[t], tab_width, printable)
+            layout = _split(poly, trees[t], world[t], tab_width, printable)
             if layout is not None and (best is None or (len(layout.fits), layout.area) < (len(best.fits), best.area)):
                 best = layout
         if best is not None:
@@ -214,7 +225,7 @@ def _tree_symmetries(group: Symmetries, trees: list[tuple[int, ...]]) -> np.ndar
     return np.stack([(np.sort(perm[edges], axis=1) == own).all(axis=1) for perm in group.edge], axis=1)
 
 
-def _single_piece(poly, tree, world_t, rooting, tab_width, printable, group, kept, mm_per_unit) -> NetLayout | None:
+def _single_piece(poly, tree, world_t, parent, tab_width, printable, group, kept, mm_per_unit) -> NetLayout | None:
     """The layout of `tree` as one piece with its tabs, or None if it does not fit.
 
     The tabs keep the symmetries `kept` (those that map the tree onto
@@ -235,10 +246,10 @@ def _single_piece(poly, tree, world_t, rooting, tab_width, printable, group, kep
         if fit is None:
             layout = None
         elif len(group) == 1:
-            return NetLayout(tree, polys, piece_of, rooting[0], tabs, [fit])
+            return NetLayout(tree, polys, piece_of, parent.copy(), tabs, [fit])
         else:
             offset = tab_offset(poly, mm_per_unit, dict(copies), tabs, group)
-            layout = NetLayout(tree, polys, piece_of, rooting[0], tabs, [fit], offset, _kept(group, tabs))
+            layout = NetLayout(tree, polys, piece_of, parent.copy(), tabs, [fit], offset, _kept(group, tabs))
         if layout is not None and (best is None or layout.key < best.key):
             best = layout
         if (best is not None and best.kept >= len(kept)) or rotations.all():
@@ -246,13 +257,13 @@ def _single_piece(poly, tree, world_t, rooting, tab_width, printable, group, kep
     return best
 
 
-def _split(poly, tree, world_t, rooting, tab_width, printable) -> NetLayout | None:
+def _split(poly, tree, world_t, tab_width, printable) -> NetLayout | None:
     """Grow pieces along the tree.
 
     A face joins its parent's piece if it overlaps nothing there and the
     piece, with a tab's width all round, still fits the page.
     """
-    parent, _, order = rooting
+    parent, _, order = rooted(poly, tree)
     m = len(poly.faces)
     polys = [world_t[k, : len(poly.faces[k])] for k in range(m)]
     piece_of = np.full(m, -1, dtype=np.intp)
