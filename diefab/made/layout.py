@@ -152,8 +152,11 @@ def lay_out(
     est = np.empty(len(trees))
     fits_page = np.empty(len(trees), dtype=bool)
     angles = np.deg2rad(np.arange(0.0, 180.0, 3.0))
+    # every face's own corners, without the repeats that pad short faces (the extents are the same)
+    k = world.shape[2]
+    corners = np.concatenate([f * k + np.arange(len(face)) for f, face in enumerate(poly.faces)])
     for start in range(0, len(trees), 512):
-        w, h = extents(world[start : start + 512].reshape(-1, m * world.shape[2], 2), angles)
+        w, h = extents(world[start : start + 512].reshape(-1, m * k, 2)[:, corners], angles)
         est[start : start + 512] = (w * h).min(axis=1)
         # the faces alone must fit, allowing for the coarse grid
         fits_page[start : start + 512] = ((w <= printable[0] * 1.03) & (h <= printable[1] * 1.03)).any(axis=1)
