@@ -5,7 +5,7 @@ every family, made in paper and in print, computed by this checkout and by a
 baseline checkout (any earlier commit: ``git worktree add BASE COMMIT``), each
 in its own process; prints the largest relative differences and the time each
 took.  A print's labels are weighed from where they are placed; the paper
-die's tabs from the net it is cut from.
+die's tabs from the net's layout (the search for its tree and tabs, without the pages).
 
 Run::
 
@@ -85,6 +85,8 @@ COMMANDS = [
     ["predict", "fudge-gem", "--fill", "print", "--model", "fast"],
     ["predict", "d20", "--fill", "print", "--model", "fast"],
     ["optimize", "fudge-gem", "--fill", "print", "--model", "fast", "--out", "{tmp}"],
+    ["predict", "fudge-gem", "--fill", "paper", "--model", "fast"],
+    ["predict", "d20", "--fill", "paper", "--model", "fast"],
 ]
 
 
