@@ -4,7 +4,7 @@ Examples
 --------
 >>> design = parse_design(design_to_toml(load_design("d6")))
 >>> design.name, design.family, len(list_templates()) > 5
-('d6', 'cuboid', True)
+('d6', 'convex', True)
 """
 
 from __future__ import annotations
