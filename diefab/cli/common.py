@@ -418,4 +418,8 @@ def print_balance(design: Design, solid, fill, spec: str):
     r = solid.report
     center = np.asarray(r["center_of_mass_mm"]["printed"]) / r["mm_per_unit"]
     body = design.mass_properties(fill)  # the inertia of the design's own print body (labels as stl engraves)
+    if solid.markers:  # the body as cut, with its markers' pockets
+        from diefab.fabricate.markers import marked_body
+
+        body = marked_body(solid, fill)
     return made_balance(design, center, "print", fill.describe(), spec, fill=fill, inertia=body.inertia / body.mass)

@@ -37,11 +37,13 @@ SIZE_HELP = (
 @click.option("--mark", type=click.Choice(["bar", "period", "none"]), default="bar", show_default=True,
               help="Mark on a label that reads as another label of the die upside down (6 and 9).")  # fmt: skip
 @click.option("--pips", is_flag=True, help="Draw values 1 to 9 as pips.")
+@click.option("--markers", "with_markers", is_flag=True,
+              help="Print each face's ArUco marker beside its value, for diefab read.")  # fmt: skip
 @fill_options("paper", kind=False)
 @out_option
 @json_option
-def net(design, params, size_mm, page, formats, face_names, tab_width, copies, mark, pips, out_dir, as_json,
-        **card) -> None:  # fmt: skip
+def net(design, params, size_mm, page, formats, face_names, tab_width, copies, mark, pips, with_markers, out_dir,
+        as_json, **card) -> None:  # fmt: skip
     """Unfolded, labelled, true-scale paper net of DESIGN with glue tabs (SVG/PDF/PNG).
 
     The SVG has Inkscape layers print, score (blue, dashed) and cut (red, one
@@ -63,7 +65,13 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
     inputs = design_inputs(design, d)
     check_outputs(paths.values(), inputs)
     the_net = design_net(d, size_mm=size_mm, page=sheet, tab_width=tab_width)
-    rendered = render_net(d, the_net, kinds, face_names=face_names, copies=copies, mark=mark, pips=pips)
+    placed = []
+    if with_markers:
+        from diefab.fabricate.markers import net_markers
+
+        placed = net_markers(d, the_net)
+    rendered = render_net(d, the_net, kinds, face_names=face_names, copies=copies, mark=mark, pips=pips,
+                          markers=placed)  # fmt: skip
     warning = small_die_warning(d, size)
     written = write_files({paths[k]: rendered[k] for k in kinds}, inputs=inputs)
     if warning:
@@ -77,7 +85,9 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
     if as_json:
         emit_json({"files": [str(p) for p in written], "size_mm": size, "pieces": the_net.n_pieces,
                    "pages": n_pages, "tabs": len(the_net.tabs),
-                   "tab_offset_mm": the_net.search.get("tab_offset_mm", 0.0), **balance.as_json()})  # fmt: skip
+                   "tab_offset_mm": the_net.search.get("tab_offset_mm", 0.0), **balance.as_json(),
+                   **({"markers": {m.face: {"id": m.marker_id, "side_mm": m.side_mm, "cell_mm": m.cell_mm}
+                                   for m in placed}} if placed else {})})  # fmt: skip
         return
     for path in written:
         click.echo(str(path))
@@ -91,4 +101,9 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
         f"{d.name}: {size:g} mm die ({d.size_note}), {dice}{pieces}, {tabs}, on {n_pages} "
         f"{sheet.name} page{'s' * (n_pages > 1)}\nto read it: {reading_note(d)}"
     )
+    if placed:
+        from diefab.fabricate.markers import marker_summary
+
+        sides, cells = [m.side_mm for m in placed], [m.cell_mm for m in placed]
+        click.echo(f"markers: {marker_summary(d, sides, cells)}; printed ink, no mass in the balance")
     click.echo(balance.summary())

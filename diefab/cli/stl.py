@@ -50,6 +50,12 @@ from diefab.core.files import check_outputs, ensure_dir, output_path, write_file
 )
 @click.option("--pips", is_flag=True, help="Values 1 to 9 as pips.")
 @click.option(
+    "--markers",
+    "with_markers",
+    is_flag=True,
+    help="Inlay each face's ArUco marker beside its value, flush (3MF: second part), for diefab read.",
+)
+@click.option(
     "--inlay",
     is_flag=True,
     help="Also write DIR/<design>-inlay.stl: the labels alone, for paint-fill or a second material.",
@@ -71,8 +77,8 @@ from diefab.core.files import check_outputs, ensure_dir, output_path, write_file
 @click.option("--preview", is_flag=True, help="Also write DIR/<design>-preview.png.")
 @out_option
 @json_option
-def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face, mark, pips, inlay, formats,
-        min_stroke, min_text_height, margin_mm, density, fit_each, preview, out_dir, as_json,
+def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face, mark, pips, with_markers, inlay,
+        formats, min_stroke, min_text_height, margin_mm, density, fit_each, preview, out_dir, as_json,
         **settings) -> None:  # fmt: skip
     """Printable STL/3MF of DESIGN with its values engraved; report volume, mass and balance."""
     from diefab.core.errors import FabricationError
@@ -102,6 +108,7 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face
         d, size_mm=size_mm, depth_mm=depth_mm, font=font_file, round_mm=round_mm, emboss=emboss,
         min_stroke_mm=min_stroke, min_text_height_mm=min_text_height, margin_mm=margin_mm,
         density_g_cm3=density, print_fill=fill, uniform_height=not fit_each, bed=bed_face, mark=mark, pips=pips,
+        markers=with_markers,
     )  # fmt: skip
     payloads = {names[k]: (stl_bytes if k == "stl" else threemf_bytes)(solid) for k in dict.fromkeys(kinds)}
     if inlay:
@@ -131,12 +138,22 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face
         f"{f', edges rounded {round_mm:g} mm' if round_mm else ''}, printed on face {r['bed_face']}\n"
         f"to read it: {reading_note(d)}\n"
         f"volume {r['volume_mm3']:.1f} mm³ (uncut {r['uncut_volume_mm3']:.1f}, text "
-        f"{r['engraved_volume_mm3']:.1f}); watertight {r['watertight']}, bodies {r['bodies']}, genus {r['genus']}\n"
+        f"{r['engraved_volume_mm3']:.1f}{' with markers' if solid.markers else ''}); "
+        f"watertight {r['watertight']}, bodies {r['bodies']}, genus {r['genus']}\n"
         f"mass {r['mass_g']:.2f} g printed ({fill.wall_thickness_mm:.2f} mm walls, {fill.infill:.0%} infill), "
         f"{r['mass_solid_g']:.2f} g solid, at {density:g} g/cm³\n"
         f"centre of mass shift: {'labels' if r['embossed'] else 'engraving'} {r['com_shift_norm_mm'] * 1000:.1f} µm, "
         f"infill {r['infill_com_shift_norm_mm'] * 1000:.1f} µm"
     )
+    if solid.markers:
+        from diefab.fabricate.markers import marker_summary
+
+        sides, cells = [m.height_mm for m in solid.markers], [m.stroke_mm for m in solid.markers]
+        click.echo(
+            f"markers: {marker_summary(d, sides, cells)}; inlaid {depth_mm:g} mm deep, flush, "
+            f"{r['marker_volume_mm3']:.1f} mm³ (in the 3MF's second part), centre of mass shift "
+            f"{r['marker_com_shift_norm_mm'] * 1000:.1f} µm (included in the mass and balance)"
+        )
     before = r["probabilities"]["rounded" if round_mm else "sharp"]
     signed = min(d.support) < 0
     click.echo("solid-angle model of the solid as cut (the balance line below is the fast model's):")

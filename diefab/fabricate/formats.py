@@ -76,8 +76,9 @@ def threemf_bytes(solid: Solid) -> bytes:
     are two closed shells of one object's mesh; every triangle names its base
     material (body or labels, each with a display colour), and PrusaSlicer's
     ``Metadata/Slic3r_PE_model.config`` names the two triangle ranges as the
-    object's two parts, so a multi-material printer prints the values in a
-    second colour.  A die without labels is one shell.
+    object's two parts, on extruders 1 and 2, so a multi-material printer
+    prints the values (and markers) in a second colour; a single-extruder
+    printer prints both parts with its one extruder.  A die without labels is one shell.
     """
     from xml.sax.saxutils import escape, quoteattr
 
@@ -114,8 +115,9 @@ def threemf_bytes(solid: Solid) -> bytes:
     )
     volumes = "".join(
         f'<volume firstid="{lo}" lastid="{hi}"><metadata type="volume" key="name" value="{name} {part}"/>'
+        f'<metadata type="volume" key="extruder" value="{index + 1}"/>'
         '<metadata type="volume" key="volume_type" value="ModelPart"/></volume>'
-        for part, lo, hi in ranges
+        for index, (part, lo, hi) in enumerate(ranges)
     )
     config = (
         '<?xml version="1.0" encoding="UTF-8"?>\n<config><object id="2" instances_count="1">'

@@ -76,6 +76,7 @@ def render_net(
     copies: int = 1,
     mark: str = "bar",
     pips: bool = False,
+    markers=(),
 ) -> dict[str, bytes]:
     """Render `copies` copies of `net` in each format: ``{"svg": bytes, "pdf": bytes, "png": bytes}``.
 
@@ -85,6 +86,8 @@ def render_net(
         Mark on a label that reads as another label of the die upside down.
     pips : bool
         Draw value labels 1 to 9 as pips.
+    markers : sequence of NetMarker
+        The die's markers on `net` (:func:`~diefab.fabricate.markers.net_markers`), printed on every copy.
     """
     from diefab.fabricate.sheet import layout_sheets, plan_footer
 
@@ -95,7 +98,7 @@ def render_net(
     sheets = layout_sheets(
         pack_copies(net, copies), labels=design.label_of, axis=design_axis(design), plan=plan,
         values=[f for f in design.label_of if f not in design.labels], face_names=face_names, mark=mark, pips=pips,
-        marks=placed_marks(design),
+        marks=placed_marks(design), markers=markers,
     )  # fmt: skip
     out: dict[str, bytes] = {}
     for fmt in formats:

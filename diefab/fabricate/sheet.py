@@ -52,6 +52,8 @@ LETTER_CLEARANCE = 0.6
 LETTER_FRACTION = 0.25
 #: Width reserved at the footer's right for "page n/N" and the calibration bar, mm.
 RIGHT_COLUMN = 22.0
+#: Where an edge letter may sit along its edge (fraction from its start): the middle, else beside a marker.
+LETTER_SPOTS = (0.5, 0.38, 0.62, 0.29, 0.71, 0.2, 0.8)
 #: Face-name height as a fraction of the value height.
 NAME_RATIO = 0.3
 _LEGEND = (
@@ -245,10 +247,41 @@ def _face_map(net: Net, k: int, axis: np.ndarray):
     return page[0], m[0], m[1]
 
 
-def _die_texts(net: Net, labels: dict[str, str], axis, *, face_names, mark, pips, values, font, bold, marks=()):
-    """Texts of one copy: edge letters, tab letters, values at corners and edges, face labels (page coordinates)."""
-    from shapely.geometry import Polygon
+def _edge_letter(shape, size, p, q, d, up, face, clear, others=None):
+    """`shape` at `size` along edge p->q inside `face`, clear of `clear` and `others` (shapely or None).
+
+    The middle of the edge; on a face with a marker (`clear`: its quiet
+    zone), the free spot farthest from the room the marker leaves for the
+    value label.
+    """
     from shapely.ops import polylabel
+
+    half = (shape.bounds[3] - shape.bounds[1]) * size / 2
+    spots = []
+    for t in LETTER_SPOTS:
+        placed = _framed(_scaled(shape, size, 0, 0), p + t * (q - p) - up * (half + 0.4), d, up)
+        if face.buffer(-0.2).contains(placed) and not any(
+            z is not None and placed.intersects(z) for z in (clear, others)
+        ):
+            if clear is None:
+                return placed
+            spots.append(placed)
+    if not spots:
+        return None
+    room = face.buffer(-FACE_MARGIN, join_style="mitre").difference(clear)
+    if room.geom_type != "Polygon":
+        room = max(getattr(room, "geoms", [room]), key=lambda g: g.area)
+    if room.is_empty:
+        return spots[0]
+    middle = polylabel(room, 0.05)
+    return max(spots, key=lambda placed: placed.distance(middle))
+
+
+def _die_texts(net: Net, labels: dict[str, str], axis, *, face_names, mark, pips, values, font, bold, marks=(),
+               markers=()):  # fmt: skip
+    """Texts of one copy: markers, edge and tab letters, values at corners and edges, face labels (page mm)."""
+    from shapely.geometry import Polygon
+    from shapely.ops import polylabel, unary_union
 
     poly = net.poly
     names = poly.names
@@ -258,6 +291,18 @@ def _die_texts(net: Net, labels: dict[str, str], axis, *, face_names, mark, pips
     folds = set(int(e) for e in net.fold_edges)
     out: list[Text] = []
     occupied: dict[int, list] = {k: [] for k in range(len(net.faces))}
+    clear: dict[int, Any] = {}
+    for m in markers:  # each marker and its quiet zone first: letters and labels keep out of them
+        k = poly.face_index(m.face)
+        out.append(Text(f"marker {m.marker_id}", "marker", m.outline, m.face, m.side_mm))
+        occupied[k].append(m.keep_clear())
+        clear[k] = m.keep_clear()
+    corner_zones: dict[int, list] = {}
+    for m in marks if markers else ():
+        k = poly.face_index(m.face)
+        ring = list(poly.faces[k])
+        zone = mark_frame(net.faces[k], tuple(ring.index(v) for v in m.at), y_down=True)[0]
+        corner_zones.setdefault(k, []).append(zone)
     for k, ring in enumerate(net.faces):
         face = Polygon(ring)
         centre = np.asarray(face.centroid.coords[0])
@@ -270,11 +315,11 @@ def _die_texts(net: Net, labels: dict[str, str], axis, *, face_names, mark, pips
             size = min(EDGE_TEXT, 0.25 * length, LETTER_FRACTION * inradius)
             letter = net.edge_labels[e]
             d, up = _edge_axes(p, q, centre - (p + q) / 2)
-            shape = _letter(letter, font)
-            half = (shape.bounds[3] - shape.bounds[1]) * size / 2
-            at = (p + q) / 2 - up * (half + 0.4)
-            placed = _framed(_scaled(shape, size, 0, 0), at, d, up)
-            if face.buffer(-0.2).contains(placed):
+            others = None
+            if k in clear:  # a letter slid along its edge keeps off the other letters and the values in corners
+                others = unary_union([*occupied[k], *corner_zones.get(k, [])])
+            placed = _edge_letter(_letter(letter, font), size, p, q, d, up, face, clear.get(k), others)
+            if placed is not None:
                 out.append(Text(letter, "edge", placed, names[k], size))
                 occupied[k].append(placed.buffer(LETTER_CLEARANCE))
     for t in net.tabs:
@@ -402,6 +447,7 @@ def layout_sheets(
     mark: str = "bar",
     pips: bool = False,
     marks=(),
+    markers=(),
 ) -> list[Sheet]:
     """One :class:`Sheet` per page for the copies `nets` of one die (see :func:`~.unfold.pack_copies`).
 
@@ -414,6 +460,8 @@ def layout_sheets(
     face_names : print the small face names (f1, f2, ...) too.
     mark, pips : see :func:`~.labels.label_shape`.
     marks : values read at a corner or along an edge (:func:`~diefab.dice.design.placed_marks`).
+    markers : the die's markers on the first copy (:func:`~diefab.fabricate.markers.net_markers`);
+        the value labels and edge letters keep out of each marker's quiet zone.
     """
     from shapely import affinity
 
@@ -424,7 +472,7 @@ def layout_sheets(
     sheets = [Sheet(page.width, page.height, k + 1, n_pages) for k in range(n_pages)]
     font, bold = load_font(bold=False), load_font()
     texts = _die_texts(first, labels, axis, face_names=face_names, mark=mark, pips=pips, values=set(values),
-                       font=font, bold=bold, marks=marks)  # fmt: skip
+                       font=font, bold=bold, marks=marks, markers=markers)  # fmt: skip
     rings = _cut_rings(first)
     names = first.poly.names
     index = {name: k for k, name in enumerate(names)}

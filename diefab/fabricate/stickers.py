@@ -17,6 +17,7 @@ from diefab.core.errors import FabricationError
 from diefab.dice.design import Design, design_axis
 from diefab.dice.markers import marker_cells, marker_layout
 from diefab.fabricate.sheet import FACE_MARGIN, MAX_FACE_TEXT, Sheet, Text
+from diefab.made.inlays import cell_outline
 from diefab.made.labels import face_frame, fit_label, label_shape
 from diefab.made.pages import parse_page
 from diefab.made.text import load_font
@@ -25,29 +26,6 @@ __all__ = ["GAP", "sticker_sheets"]
 
 #: Space between two stickers, mm.
 GAP = 3.0
-
-
-def _marker_shape(dictionary: str, marker_id: int, corners: np.ndarray):
-    """The black cells of a marker as one shapely outline, mapped onto `corners` ((4, 2): TL, TR, BR, BL)."""
-    from shapely.geometry import box
-    from shapely.ops import unary_union
-
-    cells = marker_cells(dictionary, marker_id)
-    n = cells.shape[0]
-    tl, tr, _, bl = corners
-    x, y = (tr - tl) / n, (bl - tl) / n
-    squares = []
-    for r, c in zip(*np.nonzero(cells)):
-        o = tl + c * x + r * y
-        squares.append(box(0, 0, 1, 1))
-        squares[-1] = _affine(squares[-1], x, y, o)
-    return unary_union(squares)
-
-
-def _affine(shape, x, y, origin):
-    from shapely import affinity
-
-    return affinity.affine_transform(shape, [x[0], y[0], x[1], y[1], float(origin[0]), float(origin[1])])
 
 
 def sticker_sheets(design: Design, *, size_mm: float | None = None, page: str = "A4") -> list[Sheet]:
@@ -93,7 +71,7 @@ def sticker_sheets(design: Design, *, size_mm: float | None = None, page: str = 
         sheet = sheets[-1]
         sheet.faces.append((name, face))
         sheet.cut.append(face)
-        marker = _marker_shape(layout.dictionary, marker_id, corners)
+        marker = cell_outline(marker_cells(layout.dictionary, marker_id), corners)
         sheet.texts.append(
             Text(f"marker {marker_id}", "marker", marker, name, float(np.linalg.norm(corners[1] - corners[0])))
         )

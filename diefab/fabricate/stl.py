@@ -103,8 +103,10 @@ class Solid:
         The body without its labels' material: engraved pockets empty, no
         raised text (the first colour of a two-colour print).
     inlay : (vertices, triangles) or None
-        The labels as their own solid (what fills the pockets and what
-        stands out of the faces): with `base` it makes up the finished die.
+        The labels (and markers) as their own solid (what fills the pockets
+        and what stands out of the faces): with `base` it makes up the finished die.
+    markers : tuple of Label
+        The inlaid markers' dark cells (:func:`~diefab.fabricate.markers.solid_markers`).
     """
 
     design: Design
@@ -117,6 +119,7 @@ class Solid:
     print_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
     base: tuple[np.ndarray, np.ndarray] | None = None
     inlay: tuple[np.ndarray, np.ndarray] | None = None
+    markers: tuple[Label, ...] = ()
 
     def on_bed(self, vertices: np.ndarray) -> np.ndarray:
         """(n, 3) float, mm: `vertices` moved as the body is onto the print bed (see :attr:`print_vertices`)."""
@@ -135,7 +138,7 @@ class Solid:
 
     @property
     def engraved_area_mm2(self) -> float:
-        return float(sum(label.area_mm2 for label in self.labels))
+        return float(sum(label.area_mm2 for label in (*self.labels, *self.markers)))
 
     @property
     def watertight(self) -> bool:
@@ -277,6 +280,7 @@ def build_solid(
     mark: str = "bar",
     pips: bool = False,
     with_marks: bool = True,
+    markers: bool = False,
 ) -> Solid:
     """The printable die: hull (rounded if asked), labels engraved or embossed, checked and measured.
 
@@ -326,6 +330,10 @@ def build_solid(
         Also engrave the values read at a corner or along an edge
         (:func:`~diefab.dice.design.placed_marks`, e.g. the gem's apex), in that corner
         or along that edge of every face that holds it (:func:`~diefab.made.placement.label_faces`).
+    markers : bool
+        Inlay each face's ArUco marker (:func:`~diefab.fabricate.markers.solid_markers`): its dark
+        cells cut `depth_mm` deep, flush once a second material fills them (the inlay part); the value
+        labels keep out of each marker's quiet zone.  Cells under `min_stroke_mm` are an error.
 
     Returns
     -------
@@ -385,10 +393,15 @@ def build_solid(
         if ring is None
     ]
 
-    # --- labels
+    # --- markers, then the labels beside them
+    inlays, keep_clear = (), None
+    if markers:
+        from diefab.fabricate.markers import solid_markers
+
+        inlays, keep_clear = solid_markers(design, flat, depth_mm=depth_mm, min_cell_mm=min_stroke_mm)
     labelling = label_faces(design.label_plan, flat, font, depth_mm=depth_mm, margin_mm=margin_mm,
                             min_text_height_mm=min_text_height_mm, min_stroke_mm=min_stroke_mm, mark=mark, pips=pips,
-                            uniform_height=uniform_height, with_marks=with_marks)  # fmt: skip
+                            uniform_height=uniform_height, with_marks=with_marks, keep_clear=keep_clear)  # fmt: skip
     warnings.extend(labelling.warnings)
     labels = labelling.labels
     warnings.extend(stroke_warnings(labels, min_stroke_mm))
@@ -401,8 +414,10 @@ def build_solid(
             "the others embossed, so the print stands flat"
         )
     cutters = [cutter(label, depth_mm, up) for label, up in zip(labels, raised)]
+    cutters += [cutter(m, depth_mm, False) for m in inlays]  # markers stay flush: always cut
+    cut, sunk = [*labels, *inlays], [*raised, *(False for _ in inlays)]
     raised_cutters = [c for c, up in zip(cutters, raised) if up]
-    sunk_cutters = [c for c, up in zip(cutters, raised) if not up]
+    sunk_cutters = [c for c, up in zip(cutters, sunk) if not up]
     final = cut_labels(body, raised_cutters, emboss=True, batched=batched)
     final = cut_labels(final, sunk_cutters, emboss=False, batched=batched)
     if any(raised):
@@ -416,8 +431,8 @@ def build_solid(
     volume, first = mesh_moments(mesh.vertices, mesh.triangles)
     if volume <= 0:
         raise FabricationError(f"the solid has non-positive volume {volume:.6g} mm³")
-    expected_cut = sum(label.area_mm2 for label in labels) * depth_mm
-    signed_cut = sum((1 if up else -1) * label.area_mm2 for label, up in zip(labels, raised)) * depth_mm
+    expected_cut = sum(label.area_mm2 for label in cut) * depth_mm
+    signed_cut = sum((1 if up else -1) * label.area_mm2 for label, up in zip(cut, sunk)) * depth_mm
     expected_volume = uncut_volume + signed_cut
     if abs(volume - expected_volume) > tol.STL_VOLUME_REL * expected_volume:
         raise FabricationError(
@@ -430,7 +445,7 @@ def build_solid(
     # the real body's centre of mass (a stated one, a non-convex mesh's) is off the hull's by `body_offset`;
     # rounding, engraving and infill move it as they move the hull's
     body_offset = design.mass_properties(Fill("solid")).center * scale - com_sharp
-    print_volume, com_print, hollow = _printed(design, print_fill, labels, raised, depth_mm, bed_index, round_mm,
+    print_volume, com_print, hollow = _printed(design, print_fill, cut, sunk, depth_mm, bed_index, round_mm,
                                                sharp, volume, first)  # fmt: skip
     if not all(raised) and depth_mm > print_fill.wall_thickness_mm and hollow:
         warnings.append(
@@ -487,12 +502,16 @@ def build_solid(
         report["flat_face_area_mm2"] = {
             poly.names[k]: 0.0 if ring is None else _ring_area(ring) for k, ring in enumerate(flat)
         }
+    if inlays:
+        from diefab.fabricate.markers import marker_report
+
+        report.update(marker_report(inlays, depth_mm, volume, first))
     report["bed_face"] = bed_name
     report["embossed"] = list(dict.fromkeys(label.face for label, up in zip(labels, raised) if up))
     report["engraved"] = list(dict.fromkeys(label.face for label, up in zip(labels, raised) if not up))
     return Solid(
         design, mesh.vertices, mesh.triangles, mesh.label_triangles, tuple(labels), report, tuple(warnings),
-        _rotation_to_down(poly.normals[bed_index]), _mesh_arrays(base), inlay,
+        _rotation_to_down(poly.normals[bed_index]), _mesh_arrays(base), inlay, inlays,
     )  # fmt: skip
 
 

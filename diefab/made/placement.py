@@ -23,7 +23,7 @@ from diefab.geometry.polyhedron import Polyhedron
 from diefab.made.labels import MARK_FRACTION, face_frame, fit_label, label_shape, mark_frame
 from diefab.made.text import Font, stroke_width, thin_fraction
 
-__all__ = ["Label", "LabelPlan", "Labelling", "label_faces", "stroke_warnings"]
+__all__ = ["Label", "LabelPlan", "Labelling", "label_faces", "max_cot_dihedral", "stroke_warnings"]
 
 #: Share of a label's area that may be thinner than --min-stroke before a warning.
 THIN_AREA_WARNING = 0.1
@@ -80,7 +80,7 @@ class Label:
     face_outline: Any = field(default=None, repr=False)
 
 
-def _max_cot_dihedral(poly: Polyhedron) -> np.ndarray:
+def max_cot_dihedral(poly: Polyhedron) -> np.ndarray:
     """(m,) float: largest cot of the interior dihedral angle at each face's edges (0 if all obtuse)."""
     out = np.zeros(len(poly.faces))
     for f0, f1 in poly.edge_faces:
@@ -291,6 +291,7 @@ def label_faces(
     pips: bool = False,
     uniform_height: bool = True,
     with_marks: bool = True,
+    keep_clear: dict[str, Any] | None = None,
 ) -> Labelling:
     """Place every label of `plan` on the flat part of its face (`flat`: ordered rings, mm; None: no flat part).
 
@@ -298,7 +299,10 @@ def label_faces(
     centred label then keeps :data:`MARK_CLEARANCE_MM` from them.  With
     `uniform_height` every value label takes the height of the smallest
     (a logo from the design's ``labels`` table keeps its own).  The options
-    are those of :func:`~diefab.fabricate.stl.build_solid`.
+    are those of :func:`~diefab.fabricate.stl.build_solid`; `keep_clear` maps
+    a face name to a region (shapely, the face's label coordinates: origin at
+    the mean of its flat ring, :func:`~.labels.face_frame` axes, mm) the
+    centred label must stay out of, such as the face's marker.
 
     Raises
     ------
@@ -306,7 +310,7 @@ def label_faces(
         A centred label that does not fit its face at `min_text_height_mm`.
     """
     poly, scale, axis = plan.poly, plan.mm_per_unit, plan.axis
-    cots = _max_cot_dihedral(poly)
+    cots = max_cot_dihedral(poly)
     texts = plan.texts
     shapes = {face: label_shape(t, font, others=texts.values(), mark=mark, pips=pips) for face, t in texts.items()}
 
@@ -324,10 +328,10 @@ def label_faces(
             )
         marks.append(label)
         placed.append(m)
-    avoid: dict[str, Any] = {}
+    avoid: dict[str, Any] = dict(keep_clear or {})
     for label in marks:
-        keep_clear = label.face_outline.buffer(MARK_CLEARANCE_MM)
-        avoid[label.face] = keep_clear if label.face not in avoid else avoid[label.face].union(keep_clear)
+        zone = label.face_outline.buffer(MARK_CLEARANCE_MM)
+        avoid[label.face] = zone if label.face not in avoid else avoid[label.face].union(zone)
 
     def place(face: str, text: str, cap: float = math.inf) -> Label:
         k = poly.face_index(face)
