@@ -107,7 +107,12 @@ def main() -> None:
         return
     base = measure(args.baseline.resolve(), args.per_family, args.seed)
     worst, errors = {"paper": 0.0, "print": 0.0}, 0
+    missing = sorted({k.rsplit("/", 1)[0] for k in set(now["figures"]) - set(base["figures"])})
+    if missing:  # templates added since the baseline
+        print(f"not in the baseline, not compared: {', '.join(missing)}")
     for key, a in now["figures"].items():
+        if key not in base["figures"]:
+            continue
         b = base["figures"][key]
         if isinstance(a, str) or isinstance(b, str):
             errors += a != b
