@@ -1,6 +1,7 @@
 """Held-out prediction of real dice: every shipped physics profile, and a throw fitted by cross-validation.
 
     nice -n 10 python benchmarks/bench_heldout.py [--drops 400] [--seed 1] [--workers 2] [--prior 0.5]
+        [--physics-drops 1000] [--score-drops 3000]
 
 The dice: the paper's die as made (Table 2) and every die of
 ``../shared/realrolls`` (:func:`diefab.search.fidelity.load_real_dice`), in four
@@ -33,7 +34,14 @@ stone (its own surface).
    capture grid (vigor 1), and once more with the fit restricted to dice
    rolled on the held-out die's own surface (:data:`SURFACE`; no other die
    on it: the default physics), the columns ``loo-surface`` and
-   ``lofo-surface``.
+   ``lofo-surface``; then (3') the same choices, each held-out die and the
+   default scored on ``--score-drops`` fresh drops (seed ``--score-seed``),
+   so that the simulation's own noise is small beside the real rolls'.
+4. **Throw, table and rounded edges** (:func:`table_physics`): the throws
+   0, 0.5 and 1, each alone and with rolling friction, a soft table or
+   rounded edges, and the capture grid, cross-validated the same way
+   (:mod:`diefab.search.crossval`) and scored on fresh drops, beside what a
+   perfect model scores at that many drops (``perfect``).
 
 Printed: TVD to the real frequencies per die (mirror-image outcomes up to
 relabelling), the sampling noise of the real counts (the TVD a perfect
@@ -52,6 +60,7 @@ import argparse
 import math
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -125,6 +134,20 @@ def main() -> int:
     ap.add_argument("--vigor", default="0,0.25,0.5,0.75,1", help="Grid of throw vigor (comma-separated).")
     ap.add_argument("--prior", type=float, default=0.5, help="Prior sd of vigor toward 1 (the default; inf: none).")
     ap.add_argument("--data", type=Path, default=REALROLLS)
+    ap.add_argument(
+        "--physics-drops",
+        type=int,
+        default=1000,
+        help="4.: drops per die and candidate of the fuller physics (0: skip section 4)",
+    )
+    ap.add_argument("--physics-seed", type=int, default=3)
+    ap.add_argument(
+        "--score-drops",
+        type=int,
+        default=3000,
+        help="4.: fresh drops that score each held-out die at its chosen candidate, and the default",
+    )
+    ap.add_argument("--score-seed", type=int, default=4)
     args = ap.parse_args()
     if not args.data.is_dir():
         raise SystemExit(f"no real-rolls folder {args.data}")
@@ -186,7 +209,9 @@ def main() -> int:
     full = fit_index(dice, probs, list(range(len(dice))), args.prior, vigor, 1.0)
     print(f"  in-sample (all dice): vigor {vigor[full]:g}, mean TVD {grid_tvd[:, full].mean():.4f}")
     goal(dice, cols, ref, noise, default)
-    throw_or_table(dice, sims, vigor, probs, grid_tvd, ref, noise, default, args.prior)
+    throw_or_table(dice, sims, vigor, probs, grid_tvd, ref, noise, default, args.prior, args)
+    if args.physics_drops:
+        table_physics(dice, sims, args, ref, noise)
     print(f"\n{time.perf_counter() - started:.0f} s in all; {sims.dropped} drops simulated now "
           f"({sims.seconds:.0f} s), the rest cached in {CACHE.relative_to(ROOT)}")  # fmt: skip
     shutdown_pool()
@@ -201,9 +226,12 @@ def printed_table_cv(dice, sims, noise) -> None:
     x = np.array(CAPTURE_GRID)
     from bench_calibrate import fingerprint, settings_key
 
+    cached = [i for i, d in enumerate(dice)
+              if all((fingerprint(d), settings_key(PhysicsSettings(capture_energy=c)), 2000, s) in sims.table
+                     for c in x for s in (0, 2))]  # fmt: skip
     missing = [
         (d.name, c, s)
-        for d in dice
+        for d in (dice[i] for i in idx)
         for c in x
         for s in (0, 2)
         if (fingerprint(d), settings_key(PhysicsSettings(capture_energy=c)), 2000, s) not in sims.table
@@ -214,10 +242,10 @@ def printed_table_cv(dice, sims, noise) -> None:
             f"e.g. {missing[0]}"
         )
         return
-    fit_p = [[smoothed(sims.counts_at(dice[i], PhysicsSettings(capture_energy=c), 2000, 0, [c])) for c in x]
-             for i in range(len(dice))]  # fmt: skip
-    test = [[sims.counts_at(dice[i], PhysicsSettings(capture_energy=c), 2000, 2, [c]) for c in x]
-            for i in range(len(dice))]  # fmt: skip
+    fit_p = {i: [smoothed(sims.counts_at(dice[i], PhysicsSettings(capture_energy=c), 2000, 0, [c])) for c in x]
+             for i in cached}  # fmt: skip
+    test = {i: [sims.counts_at(dice[i], PhysicsSettings(capture_energy=c), 2000, 2, [c]) for c in x]
+            for i in cached}  # fmt: skip
     sub = [dice[i] for i in idx]
     probs = [fit_p[i] for i in idx]
     loo = [fit_index(sub, probs, [j for j in range(len(sub)) if j != k], math.inf, x, 0.0) for k in range(len(sub))]
@@ -242,12 +270,14 @@ def printed_table_cv(dice, sims, noise) -> None:
     print(f"  {'mean':<13} {np.mean([noise[i] for i in idx]):>7.4f} {m[0]:>8.4f} {m[1]:>8.4f} {m[2]:>8.4f} "
           f"{'':>9} {m[3]:>8.4f}")  # fmt: skip
     others = [i for i in range(len(dice)) if i not in idx]
-    for i in others:
+    for i in (i for i in others if i not in cached):
+        print(f"  off its table: {dice[i].name:<13} capture grid not cached for this design")
+    for i in (i for i in others if i in cached):
         print(f"  off its table: {dice[i].name:<13} default {score(i, 0):.4f}, shipped capture 0.81 "
               f"{score(i, shipped):.4f} (noise {noise[i]:.4f})")  # fmt: skip
 
 
-def throw_or_table(dice, sims, vigor, probs, grid_tvd, ref, noise, default, prior_sd) -> None:
+def throw_or_table(dice, sims, vigor, probs, grid_tvd, ref, noise, default, prior_sd, args) -> None:
     """Cross-validation over the union of the vigor grid (capture 0) and the capture grid (the default throw).
 
     Candidates have coordinates (vigor, capture); the prior is normal toward the
@@ -301,6 +331,23 @@ def throw_or_table(dice, sims, vigor, probs, grid_tvd, ref, noise, default, prio
         print(f"  {how} (vigor, capture) per die: "
               + ", ".join(f"{d.name} ({x[idx[i]][0]:g}, {x[idx[i]][1]:g})" for i, d in enumerate(dice)))  # fmt: skip
     goal(dice, cols, ref, noise, default)
+    if not args.score_drops:
+        return
+
+    # the same choices, each held-out die and the default scored on fresh drops (the grid's 400 add noise)
+    def fresh(i: int, k: int) -> float:
+        v, c = x[k]
+        s = PhysicsSettings(capture_energy=float(c)) if c > 0 else throw_settings(float(v))
+        counts = sims.counts_at(dice[i], s, args.score_drops, args.score_seed)
+        return value_tvd(dice[i], counts / max(counts.sum(), 1))
+
+    fresh_default = [fresh(i, default_index) for i in range(n)]
+    cols = {"default": fresh_default}
+    for how, idx in (("loo", loo), ("lofo", lofo), ("loo-surface", loo_s), ("lofo-surface", lofo_s)):
+        cols[how] = [fresh(i, idx[i]) for i in range(n)]
+    print(f"\n3'. The same choices scored on {args.score_drops} fresh drops (seed {args.score_seed})")
+    table(dice, {**cols, **ref}, noise)
+    goal(dice, cols, ref, noise, fresh_default)
 
 
 def goal(dice, cols, ref, noise, default) -> None:
@@ -318,6 +365,97 @@ def goal(dice, cols, ref, noise, default) -> None:
               f"source's columns {mean_ref_dice:.4f} vs their best column's mean {best_source:.4f}; worse than "
               f"the default by more than the noise: {', '.join(worse) or 'none'}"
               + (f"; binom3_stone {held[stone[0]]:.4f} (goal <= 0.06)" if stone else ""))  # fmt: skip
+
+
+#: Section 4's table and die features, each at one value a unit step from the default (0).
+FEATURES = {
+    "none": {},
+    "rolling": {"rolling_friction": 0.05, "spinning_friction": 0.05},
+    "soft": {"table_softness": 0.01, "table_damping": 0.5},
+    "rounded": {"edge_radius": 0.05},
+}
+#: Section 4's throws (vigor).
+PHYSICS_VIGOR = (0.0, 0.5, 1.0)
+
+
+def table_physics(dice, sims, args, ref, noise) -> None:
+    """4. Throw, table and rounded edges: candidates fitted by cross-validation, held-out dice scored on fresh drops.
+
+    Candidates: every throw of :data:`PHYSICS_VIGOR` with every feature set of
+    :data:`FEATURES` (``--physics-drops`` drops, seed ``--physics-seed``), and
+    the capture grid at the default throw (2000 seed-0 drops, cached by
+    ``bench_calibrate.py --free capture --grid 11``).  Coordinates (vigor,
+    capture, rolling, softness, rounding) on a unit scale, the prior toward the
+    default (1, 0, 0, 0, 0).  A held-out die is scored on ``--score-drops``
+    fresh drops (seed ``--score-seed``) at its chosen candidate, and so is
+    the default, so that the simulation's own noise is small beside the
+    real counts'.
+    """
+    from bench_calibrate import fingerprint, settings_key
+
+    from diefab.search.crossval import RULES, deviance_table, held_out_choices, pick_candidate
+
+    started = time.perf_counter()
+    cands, coords, drops, seeds = [], [], [], []
+    for v in PHYSICS_VIGOR:
+        for name, extra in FEATURES.items():
+            cands.append(replace(throw_settings(v), **extra))
+            coords.append((v, 0.0, *(float(name == f) for f in ("rolling", "soft", "rounded"))))
+            drops.append(args.physics_drops)
+            seeds.append(args.physics_seed)
+    for c in CAPTURE_GRID[1:]:
+        if all((fingerprint(d), settings_key(PhysicsSettings(capture_energy=c)), 2000, 0) in sims.table for d in dice):
+            cands.append(PhysicsSettings(capture_energy=c))
+            coords.append((1.0, c, 0.0, 0.0, 0.0))
+            drops.append(2000)
+            seeds.append(0)
+    coords, x0 = np.array(coords), np.array([1.0, 0.0, 0.0, 0.0, 0.0])
+    probs = [[None] * len(cands) for _ in dice]
+    for k, s in enumerate(cands):
+        for i, d in enumerate(dice):
+            probs[i][k] = smoothed(sims.counts_at(d, s, drops[k], seeds[k]))
+        print(f"  4. candidate {k + 1}/{len(cands)} {fmt_coords(coords[k])}: simulated  "
+              f"({time.perf_counter() - started:.0f} s)", flush=True)  # fmt: skip
+    dev = deviance_table(dice, probs)
+    names = [d.name for d in dice]
+    choices = held_out_choices(names, dev, coords, x0, args.prior, family, surface)
+
+    def score(i: int, s) -> float:
+        c = sims.counts_at(dice[i], s, args.score_drops, args.score_seed)
+        return value_tvd(dice[i], c / max(c.sum(), 1))
+
+    default = [score(i, PhysicsSettings()) for i in range(len(dice))]
+    cols = {"perfect": [perfect_tvd(d, args.score_drops) for d in dice], "default": default}
+    for rule in RULES:
+        cols[rule] = [score(i, cands[k]) for i, k in enumerate(choices[rule])]
+        print(f"  4. {rule}: scored  ({time.perf_counter() - started:.0f} s)", flush=True)
+    print(f"\n4. Throw, table and rounded edges: {len(cands)} candidates (vigor, capture, rolling, softness, "
+          f"rounding) fitted on {args.physics_drops} drops per die (capture grid 2000), prior sd {args.prior:g} "
+          f"toward the default; each held-out die and the default scored on {args.score_drops} fresh drops "
+          f"(seed {args.score_seed})")  # fmt: skip
+    table(dice, {**cols, **ref}, noise)
+    print(f"  perfect: what a perfect model scores on average against these real rolls with {args.score_drops} "
+          "simulated drops (the real rolls' and the simulation's sampling noise together)")  # fmt: skip
+    for rule in RULES:
+        print(f"  {rule} candidate per die: "
+              + ", ".join(f"{d.name} {fmt_coords(coords[choices[rule][i]])}" for i, d in enumerate(dice)))  # fmt: skip
+    k = pick_candidate(dev, range(len(dice)), coords, x0, args.prior)
+    fitted = [value_tvd(d, probs[i][k] / probs[i][k].sum()) for i, d in enumerate(dice)]
+    print(f"  in-sample (fitted on all {len(dice)} dice): {fmt_coords(coords[k])}, mean TVD {np.mean(fitted):.4f} "
+          "on the fitting drops")  # fmt: skip
+    goal(dice, cols, ref, noise, default)
+
+
+def perfect_tvd(die, drops: int, samples: int = 4000, seed: int = 0) -> float:
+    """Expected TVD of a perfect model scored on `drops` simulated drops (real and simulated counts both vary)."""
+    rng = np.random.default_rng(seed)
+    real = rng.multinomial(die.n, die.frequencies, size=samples) / die.n
+    sim = rng.multinomial(drops, die.frequencies, size=samples) / drops
+    return float(np.mean([value_tvd(die, s, r) for s, r in zip(sim, real)]))
+
+
+def fmt_coords(x: np.ndarray) -> str:
+    return "(" + ", ".join(f"{v:g}" for v in x) + ")"
 
 
 if __name__ == "__main__":

@@ -25,7 +25,7 @@ import time
 import numpy as np
 
 from diefab import load_design, value_probabilities
-from diefab.studio.state import Session
+from diefab.studio.state import Session, made_body_is_slow
 
 
 def sweep(fill: str, steps: int) -> dict[str, float]:
@@ -33,7 +33,7 @@ def sweep(fill: str, steps: int) -> dict[str, float]:
     session = Session(base)
     session.edit(fill=fill)
     positions = np.linspace(1.10, 1.26, steps)
-    times = {"baseline": [], "uncached": [], "cached": []}
+    times = {"baseline": [], "uncached": [], "cached": [], "first": []}
     session.evaluation()  # warm caches that are not per position (the model's tables)
     for a in positions:
         d = session.design.with_params(a=float(a))
@@ -46,6 +46,11 @@ def sweep(fill: str, steps: int) -> dict[str, float]:
             t = time.perf_counter()
             session.evaluation()
             times[kind].append(time.perf_counter() - t)
+    for a in positions + 1e-4:  # positions not seen yet: what the page draws first on a slider step
+        session.edit(key=("param", "a"), params={"a": float(a)})
+        t = time.perf_counter()
+        session.provisional() if made_body_is_slow(session.design) else session.evaluation()
+        times["first"].append(time.perf_counter() - t)
     return {k: 1000 * float(np.median(v)) for k, v in times.items()}
 
 
@@ -55,11 +60,13 @@ def main() -> None:
     args = parser.parse_args()
     print(f"fudge-gem, slider a over {args.steps} positions; {os.cpu_count()} cores, "
           f"load average {os.getloadavg()[0]:.1f}")  # fmt: skip
-    print(f"{'fill':<8}{'baseline ms':>14}{'studio ms':>12}{'cached ms':>12}{'studio/baseline':>17}")
+    print(f"{'fill':<8}{'baseline ms':>14}{'studio ms':>12}{'cached ms':>12}{'studio/baseline':>17}"
+          f"{'first drawn ms':>16}{'first/baseline':>16}")  # fmt: skip
     for fill in ("solid", "print", "paper"):
         r = sweep(fill, args.steps)
-        print(f"{fill:<8}{r['baseline']:>14.2f}{r['uncached']:>12.2f}{r['cached']:>12.4f}"
-              f"{r['uncached'] / r['baseline']:>17.2f}")  # fmt: skip
+        ratio, first = r["uncached"] / r["baseline"], r["first"] / r["baseline"]
+        print(f"{fill:<8}{r['baseline']:>14.2f}{r['uncached']:>12.2f}{r['cached']:>12.4f}{ratio:>17.2f}"
+              f"{r['first']:>16.2f}{first:>16.3f}")  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -52,7 +52,10 @@ def counted(target: str) -> dict | None:
     from diefab.search.counting import nearest_dice
 
     best = nearest_dice(parse_target(target))
-    return {"kind": best[0].kind, "faces": best[0].faces, "tvd": float(best[0].tvd)} if best else None
+    if not best:
+        return None
+    family = best[0].plan.family if best[0].plan is not None else None
+    return {"kind": best[0].kind, "faces": best[0].faces, "tvd": float(best[0].tvd), "family": family}
 
 
 def measure(target: str, drops: int) -> dict:
@@ -96,7 +99,8 @@ def table(results: dict) -> str:
         if r is None:
             continue
         n = r.get("nearest_counted")
-        near = f"{n['faces']}-face {n['kind']}, {n['tvd']:.4f}" if n else "none"
+        shape = f" {n['family']}" if n and n.get("family") == "icosahedral" else ""
+        near = f"{n['faces']}-face{shape} {n['kind']}, {n['tvd']:.4f}" if n else "none"
         if "family" not in r and "error" not in r:
             rows.append(f"| {target} | not run | | | | {near} |")
             continue

@@ -37,3 +37,45 @@ def bad(run):
         return lines[0]
 
     return _bad
+
+
+@pytest.fixture
+def interrupt_at_random(monkeypatch):
+    """``interrupt_at_random(step, n, high, seed)``: run ``step()`` `n` times, each cut short by a stop signal.
+
+    The stop is a stand-in for Ctrl-C that a timer sends after a random 0 to `high` seconds: SIGALRM,
+    whose handler raises ``KeyboardInterrupt`` and which the file helpers defer as they defer the stop
+    signals.  ``step`` must run until interrupted.  Returns how many interrupts arrived.
+    """
+    import signal
+
+    import numpy as np
+
+    from diefab.core import files
+
+    if not hasattr(signal, "setitimer"):
+        pytest.skip("needs interval timers")
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(files, "STOP_SIGNALS", (*files.STOP_SIGNALS, signal.SIGALRM))
+
+    def run(step, n: int, high: float, seed: int = 0) -> int:
+        rng = np.random.default_rng(seed)
+        interrupted = 0
+        previous = signal.signal(signal.SIGALRM, interrupt)
+        try:
+            for _ in range(n):
+                try:
+                    signal.setitimer(signal.ITIMER_REAL, rng.uniform(0, high))
+                    step()
+                except KeyboardInterrupt:
+                    interrupted += 1
+                finally:
+                    signal.setitimer(signal.ITIMER_REAL, 0)
+        finally:
+            signal.signal(signal.SIGALRM, previous)
+        return interrupted
+
+    return run

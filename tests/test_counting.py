@@ -7,7 +7,13 @@ import numpy as np
 import pytest
 
 from diefab.dice.targets import parse_target
-from diefab.search.counting import exact_probabilities, nearest_counts, nearest_dice, nearest_two_class
+from diefab.search.counting import (
+    exact_probabilities,
+    nearest_counts,
+    nearest_dice,
+    nearest_icosahedral,
+    nearest_two_class,
+)
 from diefab.search.verdict import judge, smallest_probability
 
 
@@ -50,20 +56,27 @@ def test_a_two_class_die_rolls_the_distance_it_claims():
 
 
 @pytest.mark.slow  # finds the steadiest fair shape of every face count
-def test_many_small_probabilities_are_beyond_a_counted_die():
+def test_many_small_probabilities_are_beyond_a_bipyramid_but_not_the_icosahedral_die():
     target = parse_target("3d6")
     assert smallest_probability(target) == (Fraction(1, 216), 3)
-    best = nearest_dice(target)[0]
-    # the least a steady face lands with is min(share, 1 - share) / n >= 0.3 / 13, far above 1/216
-    assert best.tvd > Fraction(1, 20)
+    found = nearest_dice(target)
+    best = found[0]
+    assert best.plan is not None and best.plan.family == "icosahedral" and best.tvd == Fraction(1, 54)
+    # on a bipyramid or trapezohedron the least a steady face lands with is min(share, 1 - share) / n >= 0.3 / 13,
+    # far above 1/216
+    assert min(c.tvd for c in found if c.plan is None or c.plan.family != "icosahedral") > Fraction(1, 20)
 
 
 @pytest.mark.slow  # finds the steadiest fair shape of every face count
 def test_the_verdict_names_the_limit_and_passes_a_die_within_tolerance():
-    target = parse_target("3d6")
     check = {"tvd": 0.07, "n": 10_000, "expected_tvd": 0.01}
+    # 2d10: no steady counted die comes nearer than the icosahedral die's 0.0247, above the tolerance
+    verdict = judge(parse_target("2d10"), check, 0.02, method="two-class-nearest")
+    assert not verdict.met and "0.0247" in verdict.why and "0.0700" in verdict.why
+    # 3d6: its counted die (1/54) is within the tolerance, so a check far from it disagrees with the search
+    target = parse_target("3d6")
     verdict = judge(target, check, 0.02, method="two-class-nearest")
-    assert not verdict.met and "1/216" in verdict.why and "0.0700" in verdict.why
+    assert not verdict.met and "disagree" in verdict.why
     assert judge(target, {**check, "tvd": 0.015}, 0.02, method="shaped").met
     noisy = judge(parse_target("2d6"), {"tvd": 0.05, "n": 300, "expected_tvd": 0.04}, 0.02, method="two-class")
     assert not noisy.met and "--validate-sims" in noisy.why
@@ -82,3 +95,32 @@ def test_the_fast_model_is_not_trusted_where_it_differs_from_the_drops():
     skewed[-1] -= 2 * FAST_TRUST
     far = fast_agreement(d, skewed)
     assert not far["trusted"] and far["tvd_between"] == pytest.approx(2 * FAST_TRUST, abs=1e-3)
+
+
+def test_the_icosahedral_die_reaches_3d6_as_near_as_its_face_sizes_allow():
+    """12 faces at 1/72 and 30 at 1/36: every value is a multiple of 1/72, so 3 and 18 (1/216 each) are each
+    over by at least 1/72 - 1/216, and the counts found reach exactly that bound, 1/54."""
+    target = parse_target("3d6")
+    found = nearest_icosahedral(target)
+    plan = found.plan
+    assert (plan.n, plan.bottom, found.faces) == (12, 30, 42)
+    assert plan.share == pytest.approx(1 / 6)
+    assert sum(plan.alpha) == 12 and sum(plan.beta) == 30
+    assert min(a + b for a, b in zip(plan.alpha, plan.beta)) >= 1
+    assert found.tvd == 2 * (Fraction(1, 72) - Fraction(1, 216)) == Fraction(1, 54)
+    rolled = found.probabilities()
+    assert rolled.sum() == pytest.approx(1.0)
+    assert 0.5 * np.abs(rolled - target.probabilities).sum() == pytest.approx(float(found.tvd), abs=1e-12)
+
+
+@pytest.mark.parametrize("spec", ["2d6", "binomial:3", "1:1,2:2,3:3,4:4"])
+def test_unequal_classes_of_one_size_split_like_equal_halves(spec):
+    """With both classes of n faces, the general split is the two-class die's."""
+    from diefab.search.counting import _split
+
+    goal = np.array([float(p) for p in exact_probabilities(parse_target(spec))])
+    for s in (0.35, 0.5, 2 / 3):
+        a, b = _split(goal, 8, s), _split(goal, 8, s, 8)
+        assert (a is None) == (b is None)
+        if a is not None:
+            assert a[0] == pytest.approx(b[0]) and np.array_equal(a[1], b[1]) and np.array_equal(a[2], b[2])

@@ -150,7 +150,8 @@ f6 = 6
 
 
 @pytest.mark.parametrize(
-    ("spec", "template"), [("3dF", "3df"), ("binomial:4", "binomial-4"), ("UNIFORM:3", "uniform-3"), ("2d6", "2d6")]
+    ("spec", "template"),
+    [("3dF", "3df"), ("binomial:4", "binomial-4"), ("UNIFORM:3", "uniform-3"), ("2d6", "2d6"), ("3d6", "3d6")],
 )
 def test_a_target_name_finds_its_ready_made_die(spec, template):
     from diefab.dice.design import list_templates, template_path

@@ -58,11 +58,12 @@ def test_design_refuses_a_bad_profile_or_robust_without_simulation(args, words, 
 
 @pytest.mark.slow
 def test_robust_refinement_drops_every_throw_and_keeps_the_worst(monkeypatch):
+    import diefab.search.refinement as refinement
     import diefab.search.synthesis as synthesis
     from diefab.dice.targets import parse_target
 
-    monkeypatch.setattr(synthesis, "REFINE_DROPS", 600)
-    monkeypatch.setattr(synthesis, "MIN_THROW_DROPS", 300)
+    monkeypatch.setattr(refinement, "REFINE_DROPS", 600)
+    monkeypatch.setattr(refinement, "MIN_THROW_DROPS", 300)
     throws = [load_profile(p).as_dict() for p in ("soft-tray", "hard-tray")]
     found = synthesis.synthesize(parse_target("uniform:3"), family="cuboid", model="simulation", max_drops=1200,
                                  seed=2, workers=1, throws=throws)  # fmt: skip

@@ -7,7 +7,7 @@ import pytest
 
 from diefab import DesignError, load_design, value_probabilities
 from diefab.studio.state import Session, evaluate, face_colors, parameters
-from diefab.studio.view import face_frames, label_quad, net_svg
+from diefab.studio.view import die_data, face_at, label_quad, net_svg
 
 
 def test_evaluation_is_the_library_fast_model():
@@ -63,19 +63,30 @@ def test_colors_darken_with_probability():
     assert lum[0] > lum[1] > lum[2]
 
 
-def test_face_frames_place_every_vertex():
+def test_die_data_draws_every_face_with_its_label_inside_it():
     poly = load_design("fudge-gem").polyhedron
-    for k, frame in enumerate(face_frames(poly)):
-        rot = np.array(frame["rotation"])
-        np.testing.assert_allclose(rot.T @ rot, np.eye(3), atol=1e-12)
-        assert np.linalg.det(rot) == pytest.approx(1.0)
-        xy = np.array(frame["outline"])
-        placed = frame["center"] + np.column_stack([xy, np.zeros(len(xy))]) @ rot.T
-        np.testing.assert_allclose(placed, poly.vertices[np.asarray(poly.faces[k])], atol=1e-12)
-        quad = np.array(label_quad(poly, k, 0.0)).reshape(4, 3)
-        # the label lies in the face's plane, inside the face
-        np.testing.assert_allclose(quad @ poly.normals[k], poly.offsets[k], atol=1e-12)
-        assert np.all(poly.normals @ quad.T <= poly.offsets[:, None] + 1e-12)
+    m = len(poly.faces)
+    data = die_data(poly, ["#fff"] * m, [str(k) for k in range(m)], lift=0.0)
+    v = np.array(data["vertices"])
+    for k, face in enumerate(data["faces"]):
+        pts = v[face]
+        # every face lies in its plane and winds counter-clockwise seen from outside
+        np.testing.assert_allclose(pts @ poly.normals[k], poly.offsets[k], atol=1e-5)
+        assert np.cross(pts[1] - pts[0], pts[2] - pts[0]) @ poly.normals[k] > 0
+        quad = np.array(data["quads"][k])
+        # the label lies in the face's plane, inside the face, and is upright: top edge above the bottom one
+        np.testing.assert_allclose(quad @ poly.normals[k], poly.offsets[k], atol=1e-5)
+        assert np.all(poly.normals @ quad.T <= poly.offsets[:, None] + 1e-5)
+        up = label_quad(poly, k, 0.0)
+        np.testing.assert_allclose(quad, np.array(up).reshape(4, 3), atol=1e-5)
+
+
+def test_a_click_finds_the_face_under_it():
+    poly = load_design("fudge-gem").polyhedron
+    for k, face in enumerate(poly.faces):
+        centroid = poly.vertices[np.asarray(face)].mean(axis=0)
+        assert face_at(poly, centroid) == k
+        assert face_at(poly, centroid - 0.01 * poly.normals[k]) == k  # an engraved label's floor
 
 
 def test_net_svg_has_one_polygon_per_face():
@@ -124,3 +135,93 @@ def test_studio_command_refuses_bad_input_in_one_line(bad, tmp_path):
         held.listen()
         port = held.getsockname()[1]
         assert "cannot serve on 127.0.0.1" in bad("studio", "d6", "--no-browser", "--port", port, "--out", tmp_path)
+
+
+def test_provisional_evaluation_is_the_solid_body_of_the_same_shape():
+    from dataclasses import replace
+
+    from diefab.made.fill import Fill
+    from diefab.studio.state import made_body_is_slow, provisional_evaluation
+
+    paper = replace(load_design("fudge-gem"), fill=Fill("paper"))
+    assert made_body_is_slow(paper) and not made_body_is_slow(load_design("fudge-gem"))
+    ev = provisional_evaluation(paper)
+    assert ev["provisional"] and ev["fill"] == "paper"
+    solid = replace(paper, fill=Fill())
+    np.testing.assert_allclose(ev["probabilities"], value_probabilities(solid, "fast"), atol=1e-12)
+    np.testing.assert_allclose([f["margin"] for f in ev["faces"]], solid.margins())
+    assert not evaluate(solid)["provisional"]
+
+
+def test_evaluator_worker_gives_the_library_evaluation_and_stops():
+    from dataclasses import replace
+
+    from diefab.core.errors import DiefabError
+    from diefab.made.fill import Fill
+    from diefab.studio.jobs import Evaluator
+
+    printed = replace(load_design("d6"), fill=Fill("print", infill=0.2))
+    worker = Evaluator()
+    try:
+        ev = worker.evaluate(printed)
+        np.testing.assert_allclose(ev["probabilities"], evaluate(printed)["probabilities"], atol=1e-12)
+        np.testing.assert_allclose([f["margin"] for f in ev["faces"]], printed.margins(), atol=1e-12)
+        with pytest.raises(DiefabError, match="internal error"):  # not a design: one line, and the worker lives on
+            worker.evaluate(None)
+        assert worker.evaluate(printed)["probabilities"] == ev["probabilities"]
+    finally:
+        worker.stop()
+    assert not worker.process.is_alive()
+
+
+def test_made_mesh_gives_each_triangle_its_face():
+    from diefab.studio.view import made_mesh
+
+    poly = load_design("fudge-gem").polyhedron
+    triangles, owner = [], []
+    for k, face in enumerate(poly.faces):
+        for i in range(1, len(face) - 1):
+            triangles.append([face[0], face[i], face[i + 1]])
+            owner.append(k)
+    engraved = np.zeros(len(triangles), bool)
+    data = made_mesh(poly, poly.vertices, np.array(triangles), engraved)
+    assert data["face_of"] == owner
+    # a triangle sunk into a face (an engraving's floor) still belongs to that face
+    k = 3
+    floor = poly.vertices[np.asarray(poly.faces[k][:3])] * 0.9 + 0.1 * poly.vertices[poly.faces[k]].mean(axis=0)
+    floor = floor - 0.02 * poly.normals[k]
+    sunk = made_mesh(poly, floor, np.array([[0, 1, 2]]), np.array([True]))
+    assert sunk["face_of"] == [k] and sunk["engraved"] == [1]
+
+
+def test_charts_and_live_verdict():
+    from diefab.studio.chart import counts_options, live_verdict, margin_rows, validation_options
+
+    d = load_design("d6")
+    counts, sequential, plain = live_verdict(d, [1, 1, 6, 7], delta=0.03)  # 7 is not a value of the die: left out
+    assert counts == [2, 0, 0, 0, 0, 1]
+    assert sequential.startswith("3 rolls: TVD") and plain
+    opts = counts_options(["1", "2", "3", "4", "5", "6"], counts, [1 / 6] * 6)
+    assert sum(opts["series"][0]["data"]) == pytest.approx(1.0)
+    assert live_verdict(d, [], delta=0.03)[2] == ""
+    r = {"observed": [0.5, 0.5], "target": [0.5, 0.5], "intervals": [[0.4, 0.6], [0.3, 0.7]]}
+    series = {s["name"]: s["data"] for s in validation_options(["1", "2"], r)["series"]}
+    assert series["interval low"] == [0.4, 0.3] and series["interval high"] == [0.6, 0.7]
+    rows = margin_rows(evaluate(d))
+    assert [row["state"] for row in rows] == ["stable"] * 6
+
+
+def test_upload_checks(tmp_path):
+    from diefab.dice.design import design_to_toml
+    from diefab.studio.files import MAX_UPLOAD, parse_upload
+
+    d6 = load_design("d6")
+    text = design_to_toml(d6).encode()
+    assert parse_upload(text, "d6.toml", tmp_path).name == d6.name
+    with pytest.raises(DesignError, match="larger than"):
+        parse_upload(b" " * (MAX_UPLOAD + 1), "big.toml", tmp_path)
+    with pytest.raises(DesignError, match="UTF-8"):
+        parse_upload(b"\xff\xfe", "bin.toml", tmp_path)
+    outside = b'name = "m"\nfamily = "mesh"\nmesh = "/etc/passwd"\nvalues = {}\n'
+    with pytest.raises(DesignError):
+        parse_upload(outside, "m.toml", tmp_path)

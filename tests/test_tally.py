@@ -114,6 +114,51 @@ def test_roll_refuses_a_second_process_and_needs_a_terminal(bad, tmp_path):
     assert not list(tmp_path.glob(".*.lock"))  # the lock file goes with the lock
 
 
+def _roll_in_a_terminal(folder, keys: bytes, close: bool) -> int:
+    """Run ``diefab roll d6`` in a pseudo-terminal, type `keys`, then quit or close the terminal; its exit status."""
+    import pty
+    import select
+    import sys
+    import time
+    from pathlib import Path
+
+    root = str(Path(__file__).resolve().parent.parent)
+    pid, fd = pty.fork()
+    if pid == 0:  # the child: the command, at the terminal
+        os.environ["PYTHONPATH"] = root
+        os.execv(sys.executable, [sys.executable, "-m", "diefab", "roll", "d6", "--out", str(folder)])
+    shown, deadline = b"", time.monotonic() + 120
+    try:
+        while b"quit:" not in shown and time.monotonic() < deadline:  # the app is drawn
+            if select.select([fd], [], [], 0.1)[0]:
+                shown += os.read(fd, 65536)
+        for key in keys + (b"" if close else b"q"):
+            os.write(fd, bytes([key]))
+            time.sleep(0.3)
+            while select.select([fd], [], [], 0)[0]:
+                shown += os.read(fd, 65536)
+        if not close:  # read until the command has ended (a terminal that nobody reads would block it)
+            while select.select([fd], [], [], 30)[0]:
+                try:
+                    if not os.read(fd, 65536):
+                        break
+                except OSError:  # the other end closed
+                    break
+    finally:
+        os.close(fd)  # the terminal window goes: a hang-up for the command if it still runs
+    return os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1])
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="pseudo-terminals")
+@pytest.mark.parametrize("close", [False, True], ids=["quit", "terminal-closed"])
+def test_roll_in_a_terminal_keeps_every_roll_and_leaves_no_lock_file(tmp_path, close):
+    pytest.importorskip("textual")
+    status = _roll_in_a_terminal(tmp_path, b"6613", close)
+    assert status == (130 if close else 0)
+    assert read_log(tmp_path / "d6.rolls.csv").values.tolist() == [6, 6, 1, 3]
+    assert [p.name for p in tmp_path.iterdir()] == ["d6.rolls.csv"]  # the lock file went with the lock
+
+
 def test_roll_app_records_every_key_in_the_log(tmp_path):
     pytest.importorskip("textual")
     from diefab.cli.roll import roll_app

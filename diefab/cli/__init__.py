@@ -84,9 +84,12 @@ def main(argv: list[str] | None = None) -> None:
             warnings.showwarning = show
             _main(argv)
     finally:
-        release_locks()
-        for signum, previous in caught.items():
-            signal.signal(signum, previous)
+        late = []
+        try:
+            release_locks()  # with the stops deferred: one received meanwhile is raised as it ends
+        except KeyboardInterrupt:
+            late.append(stopping.stop_requested() or signal.SIGINT)
+        stopping.restore(caught, late)  # and goes to the handlers put back: one line, exit status 130
 
 
 def _one_line(text: str) -> str:
@@ -96,21 +99,29 @@ def _one_line(text: str) -> str:
 
 def error(message: str, status: int = 2):
     """Print ``diefab: error: MESSAGE`` (one line) on stderr and exit with `status`."""
-    click.echo(f"diefab: error: {_one_line(message)}", err=True)
+    _say(f"diefab: error: {_one_line(message)}")
     sys.exit(status)
 
 
-def _silence_stdout() -> None:
-    """Point stdout at /dev/null so that the interpreter's last flush cannot fail again."""
+def _say(line: str) -> None:
+    """Print `line` on stderr; if stderr is gone (its terminal closed), the exit status alone tells."""
+    try:
+        click.echo(line, err=True)
+    except (OSError, ValueError):
+        _silence(sys.stderr)
+
+
+def _silence(stream) -> None:
+    """Point `stream` at /dev/null so that the interpreter's last flush cannot fail again."""
     try:
         devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())
+        os.dup2(devnull, stream.fileno())
     except (OSError, ValueError, AttributeError):
         pass
 
 
 def _interrupted() -> None:
-    click.echo("diefab: interrupted", err=True)
+    _say("diefab: interrupted")
     sys.exit(130)
 
 
@@ -135,7 +146,7 @@ def _fail(exc: BaseException) -> None:
     try:
         raise exc
     except BrokenPipeError:  # the reader went away (``diefab templates | head -1``): stop quietly, as click does
-        _silence_stdout()
+        _silence(sys.stdout)
         sys.exit(1)
     except (click.exceptions.Abort, KeyboardInterrupt):
         _interrupted()
@@ -152,7 +163,7 @@ def _fail(exc: BaseException) -> None:
         try:
             sys.stdout.flush()
         except OSError:  # stdout itself failed: its last flush at exit must not fail again
-            _silence_stdout()
+            _silence(sys.stdout)
         where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
         error(f"{exc.strerror or exc}{where}")
     except RecursionError as exc:  # a pathological input nested too deep for the parser

@@ -152,6 +152,7 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
         f"({found.model} model, seed {seed})",
     )
     how = (f" --physics {physics_profile}" if physics_profile else "") + (" --robust" if robust else "")
+    how += (f" --family {family_name}" if family_name != "auto" else "") + (f" --faces {faces}" if faces else "")
     path = atomic_write(
         output_path(out_dir, d.name, ".toml"),
         design_to_toml(

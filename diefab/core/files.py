@@ -135,11 +135,13 @@ def signals_deferred():
         return
     noted: list[int] = []
     previous = {}
-    for signum in STOP_SIGNALS:
-        handler = signal.getsignal(signum)
-        if handler is not signal.SIG_IGN and handler is not None:  # None: set outside Python, left alone
-            previous[signum] = signal.signal(signum, lambda s, frame: noted.append(s))
     try:
+        # inside the try: a stop received before runs its handler in one of these calls, and the handlers
+        # already swapped must be put back
+        for signum in STOP_SIGNALS:
+            handler = signal.getsignal(signum)
+            if handler is not signal.SIG_IGN and handler is not None:  # None: set outside Python, left alone
+                previous[signum] = signal.signal(signum, lambda s, frame: noted.append(s))
         yield
     finally:
         for signum, handler in previous.items():
@@ -235,10 +237,16 @@ class ExclusiveLock:
             self._fd = None
 
     def __enter__(self) -> ExclusiveLock:
-        return self.acquire()
+        try:
+            with signals_deferred():  # a stop is delivered once the lock is taken, and then releases it
+                return self.acquire()
+        except BaseException:
+            self.release()
+            raise
 
     def __exit__(self, *exc) -> None:
-        self.release()
+        with signals_deferred():
+            self.release()
 
 
 #: Output locks this process keeps until :func:`release_locks` (taken by :func:`check_outputs`).
@@ -255,23 +263,30 @@ def _output_locks(targets: Iterable[str | Path]) -> list[ExclusiveLock]:
     return locks
 
 
+# A lock is taken and recorded in _HELD, or released and forgotten, with the stop signals deferred: a stop in
+# between would leave a lock file that nothing removes.
+
+
 def hold_outputs(targets: Iterable[str | Path]) -> None:
     """Lock the output files `targets` until :func:`release_locks`: a second writer of them is refused."""
-    for lock in _output_locks(targets):
-        _HELD[lock.path] = lock.acquire()
+    with signals_deferred():
+        for lock in _output_locks(targets):
+            _HELD[lock.path] = lock.acquire()
 
 
 def hold_lock(target: str | Path, what: str) -> None:
     """Lock `target` (a run folder, say) until :func:`release_locks`; refuse it if another process holds it."""
     lock = ExclusiveLock(target, what)
-    if lock.path not in _HELD:
-        _HELD[lock.path] = lock.acquire()
+    with signals_deferred():
+        if lock.path not in _HELD:
+            _HELD[lock.path] = lock.acquire()
 
 
 def release_locks() -> None:
-    """Release the output locks taken by :func:`hold_outputs` (and :func:`check_outputs`)."""
-    while _HELD:
-        _HELD.popitem()[1].release()
+    """Release the locks taken by :func:`hold_lock` and :func:`hold_outputs` (and :func:`check_outputs`)."""
+    with signals_deferred():
+        while _HELD:
+            _HELD.popitem()[1].release()
 
 
 def _read_pid(fd: int) -> int | None:

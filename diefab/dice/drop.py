@@ -30,7 +30,7 @@ __all__ = ["MIN_TIME_STEP", "OPT_IN", "PhysicsSettings"]
 #: Finest simulation step, seconds (10 kHz; pybullet's default is 240 Hz).
 MIN_TIME_STEP = 1e-4
 #: Settings added after the others, with the value that turns them off (the rigid simulation).
-OPT_IN = {"capture_energy": 0.0}
+OPT_IN = {"capture_energy": 0.0, "table_softness": 0.0, "table_damping": 0.0, "edge_radius": 0.0}
 
 
 def _check(name: str, value, ok: bool, expected: str) -> None:
@@ -106,6 +106,20 @@ class PhysicsSettings:
         turns it off: the rigid simulation.  Very large, every die lands in
         the basin of its orientation at the first check after it nears the
         ground, the quasi-static model.  In [0, 100].
+    table_softness : float
+        A table that gives: how far the die sinks into it under its own
+        weight, in units of the die's radius L (the contact stiffness is
+        ``m g / (table_softness L)``).  0 (the default) is a rigid table.
+        In [0, 0.1].
+    table_damping : float
+        Damping ratio of the soft table's contact (critical at 1), used
+        only with ``table_softness``.  In [0, 10].
+    edge_radius : float
+        Rounded edges and corners, as printed dice have: the die collides as
+        its hull shrunk by this radius and swept by a ball of it (its faces
+        stay where they are), in units of the die's radius L.  A face
+        narrower than the rounding vanishes, and the die cannot rest on it.
+        0 (the default) is the sharp hull.  In [0, 0.2].
     time_limit : float
         A die still moving after this many seconds is unsettled.
     face_tolerance : float
@@ -131,6 +145,9 @@ class PhysicsSettings:
     cocked_time: float = 1.0
     energy_fraction: float = 0.95
     capture_energy: float = 0.0
+    table_softness: float = 0.0
+    table_damping: float = 0.0
+    edge_radius: float = 0.0
     time_limit: float = 20.0
     face_tolerance: float = 3.0
 
@@ -175,6 +192,9 @@ class PhysicsSettings:
           f"in [settle_time={self.settle_time:g}, 60] seconds")  # fmt: skip
         c("energy_fraction", self.energy_fraction, 0 <= self.energy_fraction < 1, "in [0, 1)")
         c("capture_energy", self.capture_energy, 0 <= self.capture_energy <= 100, "in [0, 100] (units of m g L)")
+        c("table_softness", self.table_softness, 0 <= self.table_softness <= 0.1, "in [0, 0.1] (units of L)")
+        c("table_damping", self.table_damping, 0 <= self.table_damping <= 10, "in [0, 10]")
+        c("edge_radius", self.edge_radius, 0 <= self.edge_radius <= 0.2, "in [0, 0.2] (units of L)")
         c("time_limit", self.time_limit, self.cocked_time < self.time_limit <= 600,
           f"in (cocked_time={self.cocked_time:g}, 600] seconds")  # fmt: skip
         c("face_tolerance", self.face_tolerance, 0 < self.face_tolerance < 45, "in (0, 45) degrees")

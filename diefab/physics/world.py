@@ -315,6 +315,16 @@ class World:
                 deterministicOverlappingPairs=1,
                 physicsClientId=cid,
             )
+        # rounded edges: the shrunk hull, swept by the engine's margin (the faces' indices in the sharp die)
+        self.faces = np.arange(len(body.normals))
+        margin = s.collision_margin
+        if s.edge_radius > 0:
+            from diefab.physics.edges import shrunk_body
+
+            radius = s.edge_radius * body.radius
+            self.body, self.faces = shrunk_body(body, radius)
+            margin += radius
+        self.margin = margin
         plane = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=cid)
         self.ground = p.createMultiBody(0, plane, physicsClientId=cid)
         p.changeDynamics(
@@ -326,8 +336,15 @@ class World:
             spinningFriction=s.spinning_friction,
             physicsClientId=cid,
         )
+        self.sink = 0.0  # how far the die sinks into a soft table at rest, model units
+        if s.table_softness > 0:
+            self.sink = s.table_softness * body.radius
+            stiffness = body.mass * s.gravity / self.sink
+            damping = 2.0 * s.table_damping * np.sqrt(stiffness * body.mass)
+            p.changeDynamics(self.ground, -1, contactStiffness=stiffness, contactDamping=damping,
+                             physicsClientId=cid)  # fmt: skip
         p.setCollisionFilterGroupMask(self.ground, -1, 1, 2, physicsClientId=cid)
-        shape = p.createCollisionShape(p.GEOM_MESH, vertices=body.vertices.tolist(), physicsClientId=cid)
+        shape = p.createCollisionShape(p.GEOM_MESH, vertices=self.body.vertices.tolist(), physicsClientId=cid)
         self.dice = []
         for k in range(slots):
             die = p.createMultiBody(
@@ -347,7 +364,7 @@ class World:
                 lateralFriction=s.friction,
                 rollingFriction=s.rolling_friction,
                 spinningFriction=s.spinning_friction,
-                collisionMargin=s.collision_margin,
+                collisionMargin=margin,
                 linearDamping=0.0,
                 angularDamping=0.0,
                 # a body that falls asleep at rest and is then reset into the air would hang there
@@ -417,7 +434,8 @@ class World:
         s, body = self.settings, self.body
         n = len(states)
         if early:
-            states, skipped = fly(states, body, s)
+            # (a rounded die reaches its shrunk hull's radius plus the rounding)
+            states, skipped = fly(states, body, s, clearance=0.25 + self.margin - s.collision_margin)
         else:
             skipped = np.zeros(n, dtype=np.int64)
         outcomes = np.full(n, UNSETTLED, dtype=np.int32)
@@ -430,7 +448,8 @@ class World:
         settle_steps = int(np.ceil(s.settle_time / s.time_step - 1e-9))
         cocked_steps = int(np.ceil(s.cocked_time / s.time_step - 1e-9))
         mg = body.mass * s.gravity
-        rest = body.heights + s.collision_margin
+        # (on a soft table the die rests up to its sink lower: counting it makes the energy rule only stricter)
+        rest = body.heights + s.collision_margin - self.sink
         # None: the energy rule is off
         basins = body.basins if early and (s.energy_fraction > 0 or s.capture_energy > 0) else None
         if basins is not None:
@@ -514,7 +533,12 @@ class World:
             if nxt >= n:
                 for k in np.flatnonzero(current < 0):
                     self._park(k)  # idle dice would otherwise fall for the rest of the run
+        outcomes = self._sharp(outcomes)
         return (outcomes, ended) if with_steps else outcomes
+
+    def _sharp(self, outcomes: np.ndarray) -> np.ndarray:
+        """Outcome codes with the faces of a rounded die's shrunk hull numbered as the sharp die's."""
+        return np.where(outcomes >= 0, self.faces[np.maximum(outcomes, 0)], outcomes).astype(np.int32)
 
     # -- the straightforward loop ------------------------------------
     def run_plain(self, states: np.ndarray) -> np.ndarray:
@@ -549,7 +573,7 @@ class World:
                 else:
                     still = 0.0
         self._park(0)
-        return outcomes
+        return self._sharp(outcomes)
 
 
 # ----------------------------------------------------------------------

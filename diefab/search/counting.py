@@ -34,21 +34,37 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
+from functools import cache
 
 import numpy as np
 
 from diefab.dice.targets import Target
 from diefab.search.symmetric import MAX_FACES, SHARE_RANGE, TwoClass, fair_shapes
 
-__all__ = ["Counted", "exact_probabilities", "nearest_counts", "nearest_dice", "nearest_two_class"]
+__all__ = [
+    "Counted",
+    "exact_probabilities",
+    "nearest_counts",
+    "nearest_dice",
+    "nearest_icosahedral",
+    "nearest_two_class",
+]
 
 #: Largest denominator used to read a target's probabilities as fractions.
 MAX_DENOMINATOR = 1_000_000
-#: Shares of the top half searched for a two-class die's counts (refined exactly afterwards): a grid, and the
-#: fractions x / t with t up to 16, where targets with small denominators are carried exactly.
-SHARE_GRID = np.array(sorted({*np.round(np.linspace(SHARE_RANGE[0], SHARE_RANGE[1], 41), 12).tolist(),
-                              *(x / t for t in range(2, 17) for x in range(1, t)
-                                if SHARE_RANGE[0] <= x / t <= SHARE_RANGE[1])}))  # fmt: skip
+#: The pentagons' share of the landings an icosahedral die (12 pentagons, 30 hexagons) is asked for: the drops
+#: give it this share while it tips by at least 12 degrees.
+ICOSAHEDRAL_SHARES = (0.1, 0.3)
+
+
+def _share_grid(lo: float, hi: float) -> np.ndarray:
+    """Shares searched for a two-class die's counts (refined exactly afterwards): a grid on [lo, hi], and the
+    fractions x / t with t up to 16 in it, where targets with small denominators are carried exactly."""
+    return np.array(sorted({*np.round(np.linspace(lo, hi, 41), 12).tolist(),
+                            *(x / t for t in range(2, 17) for x in range(1, t) if lo <= x / t <= hi)}))  # fmt: skip
+
+
+SHARE_GRID = _share_grid(*SHARE_RANGE)
 
 
 def exact_probabilities(target: Target) -> list[Fraction]:
@@ -109,63 +125,85 @@ class Counted:
         """(k,) the value probabilities the die rolls (at its best share, for a two-class die)."""
         if self.plan is None:
             return np.array(self.counts, dtype=float) / self.faces
-        p = self.plan
-        return (np.array(p.alpha) * p.share + np.array(p.beta) * (1 - p.share)) / p.n
+        return self.plan.per_value(self.plan.share)
 
 
-def _split(goal: np.ndarray, n: int, s: float) -> tuple[float, np.ndarray, np.ndarray] | None:
-    """Top and bottom counts (summing to `n` each, every value at least one face) nearest ``n * goal`` at share `s`.
+def _split(goal: np.ndarray, n: int, s: float, m: int | None = None) -> tuple[float, np.ndarray, np.ndarray] | None:
+    """Top and bottom counts (summing to `n` and `m`, every value at least one face) nearest `goal` at share `s`.
 
-    Dynamic programme over the values; state: (top faces, bottom faces) used.
+    A top face lands with probability ``s / n``, a bottom face with
+    ``(1 - s) / m`` (`m` defaults to `n`).  Dynamic programme over the
+    values; state: (top faces, bottom faces) used.
     """
+    m = n if m is None else m
     k = len(goal)
     inf = np.inf
-    cost = np.zeros((n + 1, n + 1))
-    cost[:] = inf
+    top, bottom = s, (1 - s) * n / m  # a face's probability, times n
+    cost = np.full((n + 1, m + 1), inf)
     cost[0, 0] = 0.0
-    choice = np.zeros((k, n + 1, n + 1, 2), dtype=np.int16)
+    choice = np.zeros((k, n + 1, m + 1, 2), dtype=np.int16)
     for j, w in enumerate(goal * n):
-        new = np.full((n + 1, n + 1), inf)
-        pick = np.zeros((n + 1, n + 1, 2), dtype=np.int16)
-        for a in range(0, min(n, int(w / s) + 2) + 1):
-            rest = (w - a * s) / (1 - s)
+        new = np.full((n + 1, m + 1), inf)
+        pick = np.zeros((n + 1, m + 1, 2), dtype=np.int16)
+        for a in range(0, min(n, int(w / top) + 2) + 1):
+            rest = (w - a * top) / bottom
             for b in {max(0, int(np.floor(rest))), max(0, int(np.ceil(rest)))} | ({1} if a == 0 else set()):
-                if a + b < 1 or b > n:
+                if a + b < 1 or b > m:
                     continue
-                err = abs(a * s + b * (1 - s) - w)
-                shifted = np.full((n + 1, n + 1), inf)
-                shifted[a:, b:] = cost[: n + 1 - a, : n + 1 - b] + err
+                err = abs(a * top + b * bottom - w)
+                shifted = np.full((n + 1, m + 1), inf)
+                shifted[a:, b:] = cost[: n + 1 - a, : m + 1 - b] + err
                 better = shifted < new
                 new[better] = shifted[better]
                 pick[better] = (a, b)
         cost = new
         choice[j] = pick
-    if not np.isfinite(cost[n, n]):
+    if not np.isfinite(cost[n, m]):
         return None
     alpha, beta = np.zeros(k, dtype=int), np.zeros(k, dtype=int)
-    i, jb = n, n
+    i, jb = n, m
     for j in range(k - 1, -1, -1):
         a, b = choice[j, i, jb]
         alpha[j], beta[j] = a, b
         i, jb = i - a, jb - b
-    return float(cost[n, n]), alpha, beta
+    return float(cost[n, m]), alpha, beta
 
 
-def _best_share(alpha, beta, n: int, goal: list[Fraction]) -> tuple[Fraction, Fraction]:
-    """The share in :data:`SHARE_RANGE` at which counts `alpha`, `beta` come nearest `goal`, and that TVD."""
-    lo, hi = (Fraction(x).limit_denominator(100) for x in SHARE_RANGE)
+def _best_share(
+    alpha, beta, n: int, goal: list[Fraction], m: int | None = None, shares: tuple[float, float] = SHARE_RANGE
+) -> tuple[Fraction, Fraction]:
+    """The share in `shares` at which counts `alpha`, `beta` (`n` and `m` faces) come nearest `goal`, and that TVD."""
+    m = n if m is None else m
+    lo, hi = (Fraction(x).limit_denominator(100) for x in shares)
     points = {lo, hi}
     for a, b, g in zip(alpha, beta, goal):
-        if a != b:
-            s = (n * g - b) / (a - b)
+        slope = Fraction(a, n) - Fraction(b, m)
+        if slope:
+            s = (g - Fraction(b, m)) / slope
             if lo <= s <= hi:
                 points.add(s)
 
     def distance(s: Fraction) -> Fraction:
-        return _tvd([(a * s + b * (1 - s)) / n for a, b in zip(alpha, beta)], goal)
+        return _tvd([a * s / n + b * (1 - s) / m for a, b in zip(alpha, beta)], goal)
 
     best = min(sorted(points), key=distance)
     return best, distance(best)
+
+
+def _nearest_split(
+    goal: list[Fraction], n: int, m: int, shares: tuple[float, float], grid: np.ndarray
+) -> tuple[Fraction, Fraction, np.ndarray, np.ndarray] | None:
+    """(TVD, share, alpha, beta) of the two-class counts nearest `goal`, over `grid`, refined exactly; or None."""
+    g = np.array([float(p) for p in goal])
+    found = [r for r in (_split(g, n, float(s), m) for s in grid) if r is not None]
+    best = None
+    for _, alpha, beta in sorted(found, key=lambda r: r[0])[:3]:
+        if n == m and np.array_equal(alpha, beta):
+            continue
+        share, distance = _best_share(alpha.tolist(), beta.tolist(), n, goal, m, shares)
+        if best is None or distance < best[0]:
+            best = (distance, share, alpha, beta)
+    return best
 
 
 def nearest_two_class(target: Target, faces: int) -> Counted | None:
@@ -174,18 +212,7 @@ def nearest_two_class(target: Target, faces: int) -> Counted | None:
     n = faces // 2
     if not shapes or 2 * n < len(target.values):
         return None
-    goal = exact_probabilities(target)
-    g = np.array([float(p) for p in goal])
-    found = [r for r in (_split(g, n, float(s)) for s in SHARE_GRID) if r is not None]
-    if not found:
-        return None
-    best = None
-    for _, alpha, beta in sorted(found, key=lambda r: r[0])[:3]:
-        if np.array_equal(alpha, beta):
-            continue
-        share, distance = _best_share(alpha.tolist(), beta.tolist(), n, goal)
-        if best is None or distance < best[0]:
-            best = (distance, share, alpha, beta)
+    best = _nearest_split(exact_probabilities(target), n, n, SHARE_RANGE, SHARE_GRID)
     if best is None:
         return None
     distance, share, alpha, beta = best
@@ -194,6 +221,30 @@ def nearest_two_class(target: Target, faces: int) -> Counted | None:
     plan = TwoClass(family, params, "g" if family == "bipyramid" else "u", n, x, y,
                     tuple(int(a) for a in alpha), tuple(int(b) for b in beta))  # fmt: skip
     return Counted("two-class", faces, distance, plan=plan)
+
+
+def nearest_icosahedral(target: Target) -> Counted | None:
+    """The icosahedral die (12 pentagons, 30 hexagons; :mod:`diefab.dice.families.icosahedral`) nearest `target`.
+
+    Its pentagons' share of the landings is kept in :data:`ICOSAHEDRAL_SHARES`.
+    None when the target has more than 42 values.
+    """
+    n, m = 12, 30
+    if n + m < len(target.values):
+        return None
+    best = _nearest_split(exact_probabilities(target), n, m, ICOSAHEDRAL_SHARES, _icosahedral_grid())
+    if best is None:
+        return None
+    distance, share, alpha, beta = best
+    x, y = share.numerator, share.denominator - share.numerator
+    plan = TwoClass("icosahedral", {"d": 1.0}, "d", n, x, y, tuple(int(a) for a in alpha),
+                    tuple(int(b) for b in beta), m=m)  # fmt: skip
+    return Counted("two-class", n + m, distance, plan=plan)
+
+
+@cache
+def _icosahedral_grid() -> np.ndarray:
+    return _share_grid(*ICOSAHEDRAL_SHARES)
 
 
 def nearest_dice(target: Target, max_faces: int = MAX_FACES, faces: int | None = None) -> list[Counted]:
@@ -227,4 +278,8 @@ def nearest_dice(target: Target, max_faces: int = MAX_FACES, faces: int | None =
         two = nearest_two_class(target, m)
         if two is not None:
             found.append(two)
+    if (faces is None and max_faces >= 42) or faces == 42:
+        ico = nearest_icosahedral(target)
+        if ico is not None:
+            found.append(ico)
     return sorted(found, key=lambda c: (c.tvd, c.faces, c.kind != "fair"))

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from diefab.core.errors import DiefabError
-from diefab.search.calibrate import RealDie
+from diefab.search.realdie import RealDie
 
 __all__ = [
     "LANDING_MODELS",
@@ -87,7 +87,7 @@ def load_real_dice(folder: str | Path | None, *, paper: bool = True, published: 
 
     A `folder` that is None or does not exist contributes no die.
     """
-    from diefab.search.calibrate import realrolls_die
+    from diefab.search.realdie import realrolls_die
 
     dice = [paper_die()] if paper else []
     if folder is not None and Path(folder).is_dir():

@@ -24,7 +24,7 @@ from importlib import resources
 
 import numpy as np
 
-from diefab.search.calibrate import RealDie
+from diefab.search.realdie import RealDie
 
 __all__ = ["PUBLISHED", "published_source", "square_cuboid", "square_cuboid_dice"]
 

@@ -17,7 +17,7 @@ from typing import Any
 from diefab.core.errors import DiefabError, OutputError
 from diefab.core.files import hold_lock, write_files
 from diefab.physics.simulate import MAX_DROPS
-from diefab.search.simopt import RunError, RunSpec, is_finite_number
+from diefab.search.runspec import RunError, RunSpec, is_finite_number
 
 __all__ = ["RunLog"]
 

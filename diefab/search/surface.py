@@ -15,7 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from diefab.search.calibrate import SMOOTHING, CalibrationError, RealDie, deviance
+from diefab.search.likelihood import SMOOTHING, deviance
+from diefab.search.realdie import CalibrationError, RealDie
 
 __all__ = ["ResponseSurface", "fit_settings", "fit_surface", "prior_penalty", "quadratic_features"]
 

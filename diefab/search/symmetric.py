@@ -227,10 +227,21 @@ class TwoClass:
     y: int
     alpha: tuple[int, ...]
     beta: tuple[int, ...]
+    #: Faces of the bottom class when it has not as many as the top (the icosahedral die: 12 and 30).
+    m: int | None = None
+
+    @property
+    def bottom(self) -> int:
+        """Faces of the bottom class (the top's :attr:`n` on a bipyramid or trapezohedron)."""
+        return self.n if self.m is None else self.m
 
     @property
     def faces(self) -> int:
-        return 2 * self.n
+        return self.n + self.bottom
+
+    def per_value(self, share: float) -> np.ndarray:
+        """(k,) value probabilities when the top class takes `share` of the landings."""
+        return np.array(self.alpha) * share / self.n + np.array(self.beta) * (1 - share) / self.bottom
 
     @property
     def share(self) -> float:
@@ -300,7 +311,7 @@ def two_class_plans(target: Target, max_faces: int = MAX_FACES, enough: int | No
 
 
 def two_class_values(poly: Polyhedron, target: Target, plan: TwoClass) -> dict[str, int]:
-    """Face name -> value: ``plan.alpha`` counted out on the top half, ``plan.beta`` on the bottom, spread round."""
+    """Face name -> value: ``plan.alpha`` counted out on the top class (the first faces), ``plan.beta`` on the rest."""
     values = [int(v) for v in target.values]
     top = _spread(values, list(plan.alpha))
     bottom = _spread(values[::-1], list(plan.beta)[::-1])  # high values below low ones: spread round the die

@@ -107,8 +107,8 @@ def _smallest_face(counted: Counted) -> float:
     """The smallest probability one face of a counted die lands with."""
     if counted.plan is None:
         return 1 / counted.faces
-    share = counted.plan.share
-    return min(share, 1 - share) / counted.plan.n
+    plan = counted.plan
+    return min(plan.share / plan.n, (1 - plan.share) / plan.bottom)
 
 
 def _fraction(p: Fraction) -> str:

@@ -3,7 +3,8 @@
 A job runs one function in a fresh ("spawn") process, so that the web
 server's threads and event loop are not copied into it; the function reports
 through a queue: ``("progress", done, total)``, ``("note", text)``, then
-``("done", result)`` or ``("error", message)``.  :meth:`Job.cancel` ends the
+``("done", result)`` or ``("error", message)``; any other kind is kept in
+:attr:`Job.events` for the page to read.  :meth:`Job.cancel` ends the
 process, which is what the page does when it closes.
 """
 
@@ -36,6 +37,7 @@ class Job:
         self.done: int | float = 0
         self.total: int | float = 0
         self.notes: list[str] = []
+        self.events: list[tuple] = []
         self.result: Any = None
         self.error: str | None = None
         self.finished = False
@@ -70,6 +72,8 @@ class Job:
                 self.result, self.finished = msg[1], True
             elif kind == "error":
                 self.error, self.finished = msg[1], True
+            else:
+                self.events.append(msg)
         if not self.finished and not self.process.is_alive():
             self.poll_once_more()
         return self.finished
@@ -87,15 +91,20 @@ class Job:
 
     def cancel(self) -> None:
         """Stop the worker (SIGTERM, then SIGKILL after 2 s)."""
-        if self.process.is_alive():
-            self.process.terminate()
-            self.process.join(2.0)
-            if self.process.is_alive():
-                self.process.kill()
-                self.process.join(1.0)
+        end_process(self.process)
         if not self.finished:
             self.error, self.finished = "cancelled", True
         self._queue.close()
+
+
+def end_process(process) -> None:
+    """End a worker `process`: SIGTERM, then SIGKILL if it is still alive 2 s later."""
+    if process.is_alive():
+        process.terminate()
+        process.join(2.0)
+        if process.is_alive():
+            process.kill()
+            process.join(1.0)
 
 
 def _run(func, args, q) -> None:
@@ -113,6 +122,62 @@ def _run(func, args, q) -> None:
     finally:
         q.close()
         q.join_thread()
+
+
+class Evaluator:
+    """A worker process that evaluates designs (:func:`diefab.studio.state.evaluate`) one at a time.
+
+    For a made body whose mass model takes seconds: the page keeps serving
+    while the worker computes.  :meth:`evaluate` blocks its (thread's) caller
+    until the result arrives; :meth:`stop` ends the worker, and a caller
+    waiting on it gets :class:`~diefab.core.errors.DiefabError`.
+    """
+
+    def __init__(self) -> None:
+        ctx = mp.get_context("spawn")
+        self._inbox, self._outbox = ctx.Queue(), ctx.Queue()
+        self.process = ctx.Process(target=_evaluate_forever, args=(self._inbox, self._outbox), daemon=True)
+        self.process.start()
+        self._asked = 0
+
+    def evaluate(self, design) -> dict:
+        """The evaluation of `design` (blocks; one caller at a time)."""
+        self._asked += 1
+        self._inbox.put((self._asked, design))
+        while True:
+            try:
+                number, kind, payload = self._outbox.get(timeout=0.5)
+            except queue_module.Empty:
+                if not self.process.is_alive():
+                    raise DiefabError("the evaluation worker stopped") from None
+                continue
+            except (OSError, ValueError):
+                raise DiefabError("the evaluation worker stopped") from None
+            if number != self._asked:
+                continue  # the answer to a question whose caller gave up
+            if kind == "error":
+                raise DiefabError(payload)
+            return payload
+
+    def stop(self) -> None:
+        """End the worker (SIGTERM, then SIGKILL after 2 s)."""
+        end_process(self.process)
+
+
+def _evaluate_forever(inbox, outbox) -> None:
+    from diefab.studio.state import evaluate
+
+    try:
+        while True:
+            number, design = inbox.get()
+            try:
+                outbox.put((number, "done", evaluate(design)))
+            except DiefabError as exc:
+                outbox.put((number, "error", str(exc)))
+            except Exception as exc:  # a bug: one line in the page, never a traceback
+                outbox.put((number, "error", f"internal error: {type(exc).__name__}: {exc}"))
+    except KeyboardInterrupt:  # the server was stopped with Ctrl-C
+        pass
 
 
 def validate_job(design, sims: int, seed: int, profile: str | None, *, report) -> dict:
@@ -168,3 +233,64 @@ def design_job(target: str, fill, model: str, budget_seconds: float, seed: int, 
                        name=name, workers=1, progress=say)  # fmt: skip
     report("progress", budget_seconds, budget_seconds)
     return design_to_toml(found.design, comment=f"designed by diefab studio for target {target}")
+
+
+def solid_job(design, *, report) -> dict:
+    """The printable solid of `design` as ``diefab stl`` makes it by default, for the 3D view (:func:`.made_mesh`)."""
+    from diefab.fabricate.stl import build_solid
+    from diefab.studio.view import made_mesh
+
+    fill = design.fill if design.fill.kind == "print" else None
+    solid = build_solid(design, **({"print_fill": fill} if fill is not None else {}))
+    return made_mesh(design.polyhedron, solid.vertices / design.mm_per_unit, solid.triangles, solid.label_triangles)
+
+
+#: Width of the camera frames the page shows, pixels, and the least time between two of them, seconds.
+PREVIEW_WIDTH = 480
+PREVIEW_EVERY = 0.25
+
+
+def read_job(design, source: dict, settle: int, min_confidence: float, fov: float, log_path, *, report) -> int:
+    """Read rolls of `design`'s marked die from `source` (as ``diefab read``) and append them to `log_path`.
+
+    `source` is one of ``{"camera": index}``, ``{"video": path}``, ``{"images": folder}``.
+    Reports ``("frame", jpeg data URL)`` now and then (the frame with the
+    detection drawn), ``("roll", time, value or None, face or None,
+    confidence)`` for every roll, and ``("progress", frames read, 0)``.
+    Returns the number of rolls read.
+    """
+    import base64
+
+    import cv2
+
+    from diefab.camera.reader import RollReader, frames
+    from diefab.camera.render import draw_detection
+    from diefab.core.files import hold_lock
+    from diefab.stats.rolllog import Roll, append_roll, read_log
+
+    reader = RollReader(design, settle=settle, min_confidence=min_confidence, fov=fov)
+    hold_lock(log_path, f"roll log {log_path}")  # one writer per log, until the worker ends
+    rows = read_log(log_path).rolls if log_path.exists() else []
+    offset = max((r.frame for r in rows if r.frame is not None), default=-1) + 1
+    photos = "images" in source
+    names = design.polyhedron.names
+    shown, count = 0.0, 0
+    for t, gray in frames(**source):
+        seen, roll = reader.feed_rest(gray) if photos else reader.feed(gray)
+        now = time.monotonic()
+        if seen is not None and (photos or roll is not None or now - shown >= PREVIEW_EVERY):
+            image = draw_detection(gray, seen, design, reader.layout, reader.camera)
+            scale = PREVIEW_WIDTH / image.shape[1]
+            small = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+            ok, data = cv2.imencode(".jpg", small, [cv2.IMWRITE_JPEG_QUALITY, 80])
+            if ok:
+                report("frame", "data:image/jpeg;base64," + base64.b64encode(data.tobytes()).decode("ascii"))
+                shown = now
+        report("progress", reader.frame + 1, 0)
+        if roll is None:
+            continue
+        face = None if roll.face is None else names[roll.face]
+        append_roll(log_path, Roll(f"{t:.3f}", roll.value, face, round(float(roll.confidence), 4), offset + roll.frame))
+        report("roll", float(t), roll.value, face, float(roll.confidence))
+        count += 1
+    return count

@@ -94,7 +94,29 @@ def evaluate(design: Design, model: str = "fast") -> dict[str, Any]:
         "min_margin": float(margins[resting].min()) if resting.any() else float("nan"),
         "stable": stable,
         "message": message,
+        "provisional": False,
     }
+
+
+def made_body_is_slow(design: Design) -> bool:
+    """True when the made body's mass model takes long (a paper net's tabs, a print's shells and labels).
+
+    The page then shows :func:`provisional_evaluation` at once and the full
+    evaluation when a worker has it.
+    """
+    return design.fill.kind != "solid"
+
+
+def provisional_evaluation(design: Design) -> dict[str, Any]:
+    """:func:`evaluate` of `design` as a solid body (milliseconds), marked ``provisional``.
+
+    A stand-in while the made body's evaluation runs: the shape's effect on
+    the distribution, without the fill's.
+    """
+    from diefab.made.fill import Fill
+
+    ev = evaluate(replace(design, fill=Fill()))
+    return {**ev, "fill": design.fill.kind, "provisional": True}
 
 
 def _labels_ok(design: Design) -> bool:
@@ -175,16 +197,43 @@ class Session:
     def evaluation(self, design: Design | None = None) -> dict[str, Any]:
         """:func:`evaluate` of `design` (default: the current one), cached."""
         d = design or self.design
-        key = _key(d)
-        hit = self._cache.get(key)
+        hit = self.cached(d)
         if hit is None:
             hit = evaluate(d)
-            self._cache[key] = hit
-            while len(self._cache) > CACHE:
-                self._cache.popitem(last=False)
-        else:
+            self.remember(d, hit)
+        return hit
+
+    def provisional(self, design: Design | None = None) -> dict[str, Any]:
+        """:func:`provisional_evaluation` of `design` (default: the current one), cached."""
+        d = design or self.design
+        key = ("provisional", _key(d))
+        hit = self._cache.get(key)
+        if hit is None:
+            hit = provisional_evaluation(d)
+            self._store(key, hit)
+        return hit
+
+    def cached(self, design: Design) -> dict[str, Any] | None:
+        """The evaluation of `design` if it was made already, else None."""
+        key = _key(design)
+        hit = self._cache.get(key)
+        if hit is not None:
             self._cache.move_to_end(key)
         return hit
+
+    def remember(self, design: Design, ev: dict[str, Any]) -> None:
+        """Keep `ev` as the evaluation of `design` (one made elsewhere, e.g. in a worker process)."""
+        self._store(_key(design), ev)
+
+    def is_current(self, design: Design) -> bool:
+        """True when `design` is the die being edited (equal in every field, not necessarily the same object)."""
+        return _key(design) == _key(self.design)
+
+    def _store(self, key: tuple, ev: dict[str, Any]) -> None:
+        self._cache[key] = ev
+        self._cache.move_to_end(key)
+        while len(self._cache) > CACHE:
+            self._cache.popitem(last=False)
 
 
 def _key(design: Design) -> tuple:

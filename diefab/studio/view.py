@@ -1,4 +1,4 @@
-"""Geometry the page draws: each face of the die as a flat plate, and the net as SVG polygons."""
+"""Geometry the page draws: the die's faces, colors and labels for the 3D view, and the net as SVG polygons."""
 
 from __future__ import annotations
 
@@ -9,31 +9,71 @@ import numpy as np
 from diefab.geometry.polyhedron import Polyhedron
 
 
-def face_frames(poly: Polyhedron) -> list[dict]:
-    """Each face in its own plane: outline, rotation and centre to place it in the scene.
+def die_data(poly: Polyhedron, colors: list[str], labels: list[str], lift: float = 0.002) -> dict:
+    """What the page's 3D die is drawn from (``die.js``): the faces, their colors and their printed values.
+
+    Parameters
+    ----------
+    poly : Polyhedron
+    colors : list of str
+        One CSS color per face.
+    labels : list of str
+        The text printed on each face ("" for none).
+    lift : float
+        Height of a label above its face, model units.
 
     Returns
     -------
-    list of dict
-        ``outline`` : (k, 2) list, the face's vertices in the face frame;
-        ``rotation`` : (3, 3) list whose columns are the frame's axes
-        (in-plane x, in-plane y, outward normal); ``center`` : (3,) list,
-        the vertex centroid.  A frame point ``(x, y, z)`` lands at
-        ``center + rotation @ (x, y, z)``, model units.
+    dict
+        ``vertices`` : (n, 3) list, model units; ``faces`` : lists of vertex
+        indices; ``colors``, ``labels`` : one per face; ``quads`` : each
+        face's label corners (:func:`label_quad`, flattened to 4 points:
+        top-left, top-right, bottom-left, bottom-right).
     """
-    out = []
-    for k, face in enumerate(poly.faces):
-        pts = poly.vertices[np.asarray(face)]
-        center = pts.mean(axis=0)
-        n = poly.normals[k] / np.linalg.norm(poly.normals[k])
-        e1 = pts[1] - pts[0]
-        e1 = e1 - n * (e1 @ n)
-        e1 /= np.linalg.norm(e1)
-        e2 = np.cross(n, e1)
-        rot = np.column_stack([e1, e2, n])
-        local = (pts - center) @ rot
-        out.append({"outline": local[:, :2].tolist(), "rotation": rot.tolist(), "center": center.tolist()})
-    return out
+    quads = [sum(label_quad(poly, k, lift), []) for k in range(len(poly.faces))]
+    return {"vertices": np.round(poly.vertices, 6).tolist(), "faces": [list(map(int, f)) for f in poly.faces],
+            "colors": list(colors), "labels": list(labels), "quads": np.round(quads, 6).tolist()}  # fmt: skip
+
+
+def made_mesh(poly: Polyhedron, vertices: np.ndarray, triangles: np.ndarray, engraved: np.ndarray) -> dict:
+    """The die as made (a printable solid's mesh) for the 3D view: each triangle with the face it belongs to.
+
+    Parameters
+    ----------
+    poly : Polyhedron
+        The die's polyhedron, model units.
+    vertices : (n, 3) float
+        The solid's vertices, model units (millimetres / ``mm_per_unit``).
+    triangles : (t, 3) int
+        Outward triangles.
+    engraved : (t,) bool
+        Triangles of the labels (walls and floors of an engraving, or raised text).
+
+    Returns
+    -------
+    dict
+        ``vertices``, ``triangles``, ``face_of`` (the face whose plane is
+        nearest to each triangle's centroid: its own face, or the face its
+        label is cut into) and ``engraved`` (0/1), as lists.
+    """
+    v = np.asarray(vertices, dtype=float)
+    t = np.asarray(triangles, dtype=np.int64)
+    centroids = v[t].mean(axis=1)
+    face_of = np.argmin(np.abs(centroids @ poly.normals.T - poly.offsets), axis=1)
+    return {"vertices": np.round(v, 5).tolist(), "triangles": t.tolist(), "face_of": face_of.tolist(),
+            "engraved": np.asarray(engraved, dtype=int).tolist()}  # fmt: skip
+
+
+def face_at(poly: Polyhedron, point) -> int:
+    """Index of the face of the (convex) die nearest to `point` on its surface (a click on the 3D die).
+
+    Parameters
+    ----------
+    point : (3,) float
+        A point on or near the surface, model units.
+    """
+    distance = np.abs(poly.normals @ np.asarray(point, dtype=float) - poly.offsets)
+    return int(np.argmin(distance))
 
 
 def label_frame(poly: Polyhedron, k: int) -> np.ndarray:
@@ -108,27 +148,3 @@ def label_quad(poly: Polyhedron, k: int, lift: float) -> list[list[list[float]]]
     corner = [[c - half * right + half * up, c + half * right + half * up],
               [c - half * right - half * up, c + half * right - half * up]]  # fmt: skip
     return [[p.tolist() for p in row] for row in corner]
-
-
-def label_image(text: str, background: str = "#ffffff", px: int = 96) -> str:
-    """A PNG of `text` (dark, bold, centered on a `background` square) as a ``data:`` URL."""
-    import base64
-    import io
-
-    from matplotlib import font_manager
-    from PIL import Image, ImageDraw, ImageFont
-
-    font_file = font_manager.findfont(font_manager.FontProperties(family="DejaVu Sans", weight="bold"))
-    img = Image.new("RGB", (px, px), background)
-    draw = ImageDraw.Draw(img)
-    size = px
-    while size > 8:
-        font = ImageFont.truetype(font_file, size)
-        x0, y0, x1, y1 = draw.textbbox((0, 0), text, font=font)
-        if x1 - x0 <= 0.92 * px and y1 - y0 <= 0.92 * px:
-            break
-        size -= 4
-    draw.text(((px - (x1 - x0)) / 2 - x0, (px - (y1 - y0)) / 2 - y0), text, font=font, fill=(20, 20, 20))
-    buf = io.BytesIO()
-    img.save(buf, format="PNG")
-    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode("ascii")

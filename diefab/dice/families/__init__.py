@@ -8,6 +8,7 @@ measures) and how its faces are read.  One module per family:
 ``ngem``  the gem over an n-gon girdle, 2n+1 faces, with an asymmetric variant (:mod:`.ngem`)
 ``prism``  flat-ended or capped prisms (:mod:`.prism`)
 ``bipyramid``, ``trapezohedron``  (:mod:`.bipyramid`)
+``icosahedral``  the rhombic triacontahedron with pentagons at its five-fold corners, 42 faces (:mod:`.icosahedral`)
 ``cuboid``  boxes, long and tapered (:mod:`.cuboid`)
 ``freeform``  planes at free offsets along fixed normals (:mod:`.freeform`)
 ``convex``, ``mesh``  any convex polyhedron given by vertices or a mesh file in the design
@@ -21,6 +22,7 @@ from diefab.dice.families.bipyramid import BIPYRAMID, TRAPEZOHEDRON
 from diefab.dice.families.cuboid import CUBOID
 from diefab.dice.families.freeform import FREEFORM
 from diefab.dice.families.gem import GEM, gem_center_of_mass_y, gem_parameters, gem_polyhedron, gem_vertices
+from diefab.dice.families.icosahedral import ICOSAHEDRAL
 from diefab.dice.families.ngem import NGEM
 from diefab.dice.families.prism import PRISM
 
@@ -39,7 +41,9 @@ __all__ = [
 CONVEX = Family("convex", (), "any convex polyhedron given by its vertices")
 MESH = Family("mesh", (), "a convex mesh file (OBJ, STL, PLY)")
 
-_FAMILIES = {f.name: f for f in (GEM, NGEM, PRISM, BIPYRAMID, TRAPEZOHEDRON, CUBOID, FREEFORM, CONVEX, MESH)}
+_FAMILIES = {
+    f.name: f for f in (GEM, NGEM, PRISM, BIPYRAMID, TRAPEZOHEDRON, ICOSAHEDRAL, CUBOID, FREEFORM, CONVEX, MESH)
+}
 
 
 def families() -> list[Family]:

@@ -1,0 +1,81 @@
+"""What the stages of a design search share: the run's state, and what a stage returns.
+
+:class:`SearchRun` holds one search's seed, drop budget, wall-time cap,
+workers and reporters, and counts the drops every stage spends;
+:class:`Synthesis` is a stage's result, and :func:`~diefab.search.synthesis.synthesize`'s.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from diefab.dice.design import Design
+from diefab.search.counting import Counted
+
+__all__ = ["RANK_MODEL", "SearchRun", "Synthesis"]
+
+#: Model used to rank candidates and to start the simulation refinement.
+RANK_MODEL = "fast"
+
+
+@dataclass
+class Synthesis:
+    """What :func:`synthesize` found."""
+
+    design: Design
+    objective: float
+    #: (k,) value probabilities under the model the design was optimized for.
+    predicted: np.ndarray
+    model: str
+    #: Every candidate tried: family, faces, objective.
+    tried: list[dict] = field(default_factory=list)
+    #: Refinement steps: simulated TVD at each.
+    steps: list[dict] = field(default_factory=list)
+    #: How the die carries the target: "fair", "two-class" or "shaped".
+    method: str = "shaped"
+    #: True if the wall-time cap ended a stage early: the same seed and options may then give another die.
+    capped: bool = False
+    #: The fair or two-class die whose face counts come nearest the target (:mod:`diefab.search.counting`), if any.
+    nearest: Counted | None = None
+    #: Drops the search spent.
+    drops: int = 0
+    #: The simulated TVD of the die kept (the refinement's or the two-class tuning's), if it was simulated.
+    simulated_tvd: float | None = None
+
+
+@dataclass
+class SearchRun:
+    """What every stage of one search shares: its seed, drop budget, wall-time cap, workers and reporters."""
+
+    seed: int
+    max_drops: int
+    deadline: float
+    workers: int | None
+    scheduler: Any
+    settings: Any
+    say: Callable[[str], None]
+    tick: Callable[[str, int, int], None]
+    used: int = 0
+    capped: bool = False
+
+    def note_cap(self) -> None:
+        """Record that the wall-time cap has passed (the stage that just ended may have been cut)."""
+        self.capped = self.capped or time.monotonic() > self.deadline
+
+    def simulate(self, design: Design, n: int, seed: int, stage: str, settings=None):
+        """Drop `design` `n` times, counting the drops against the budget and ticking `stage`."""
+        from diefab.physics.simulate import simulate
+
+        before = self.used
+        result = simulate(design, n, seed=seed, workers=self.workers, scheduler=self.scheduler,
+                          settings=settings if settings is not None else self.settings,
+                          progress=lambda done, total: self.tick(stage, min(before + done, self.max_drops),
+                                                                 self.max_drops))  # fmt: skip
+        self.used += n
+        self.tick(stage, min(self.used, self.max_drops), self.max_drops)
+        return result
