@@ -5,7 +5,7 @@ every family, made in paper and in print, computed by this checkout and by a
 baseline checkout (any earlier commit: ``git worktree add BASE COMMIT``), each
 in its own process; prints the largest relative differences and the time each
 took.  A print's labels are weighed from where they are placed; the paper
-die's tabs from the net it is cut from.
+die's tabs from the net's layout (the search for its tree and tabs, without the pages).
 
 Run::
 
@@ -85,6 +85,8 @@ COMMANDS = [
     ["predict", "fudge-gem", "--fill", "print", "--model", "fast"],
     ["predict", "d20", "--fill", "print", "--model", "fast"],
     ["optimize", "fudge-gem", "--fill", "print", "--model", "fast", "--out", "{tmp}"],
+    ["predict", "fudge-gem", "--fill", "paper", "--model", "fast"],
+    ["predict", "d20", "--fill", "paper", "--model", "fast"],
 ]
 
 
@@ -105,7 +107,12 @@ def main() -> None:
         return
     base = measure(args.baseline.resolve(), args.per_family, args.seed)
     worst, errors = {"paper": 0.0, "print": 0.0}, 0
+    missing = sorted({k.rsplit("/", 1)[0] for k in set(now["figures"]) - set(base["figures"])})
+    if missing:  # templates added since the baseline
+        print(f"not in the baseline, not compared: {', '.join(missing)}")
     for key, a in now["figures"].items():
+        if key not in base["figures"]:
+            continue
         b = base["figures"][key]
         if isinstance(a, str) or isinstance(b, str):
             errors += a != b

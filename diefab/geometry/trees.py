@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from functools import lru_cache
 
 import numpy as np
 
@@ -62,11 +63,19 @@ def _find(parent: list[int], x: int) -> int:
 
 
 def all_trees(poly: Polyhedron) -> list[tuple[int, ...]]:
-    """Every spanning tree, as sorted tuples of edge indices."""
-    m, ef = len(poly.faces), poly.edge_faces
+    """Every spanning tree, as sorted tuples of edge indices.
+
+    They depend on the faces' adjacency alone, so dice of one shape with
+    other proportions share one enumeration.
+    """
+    pairs = tuple((int(a), int(b)) for a, b in poly.edge_faces)
+    return list(_all_trees(len(poly.faces), pairs))
+
+
+@lru_cache(maxsize=16)
+def _all_trees(m: int, pairs: tuple[tuple[int, int], ...]) -> tuple[tuple[int, ...], ...]:
     out = []
-    pairs = [(int(a), int(b)) for a, b in ef]
-    for combo in itertools.combinations(range(len(ef)), m - 1):
+    for combo in itertools.combinations(range(len(pairs)), m - 1):
         parent = list(range(m))
         for e in combo:
             ra, rb = _find(parent, pairs[e][0]), _find(parent, pairs[e][1])
@@ -75,7 +84,7 @@ def all_trees(poly: Polyhedron) -> list[tuple[int, ...]]:
             parent[ra] = rb
         else:
             out.append(combo)
-    return out
+    return tuple(out)
 
 
 def kruskal(poly: Polyhedron, weights: np.ndarray) -> tuple[int, ...]:

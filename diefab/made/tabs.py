@@ -14,6 +14,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -66,19 +67,40 @@ def trapezoid(p, q, width, cp, cq) -> np.ndarray | None:
 
 def free_angle(point, direction, shapes) -> float:
     """Clockwise angle (rad) from `direction` at `point` to the nearest edge of `shapes` leaving `point`."""
+    return _free_angle(point, direction, *_corners(shapes))
+
+
+def _corners(shapes: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every vertex of `shapes`, (n, 2), with the vertex before it and the one after it around its own shape."""
+    if not shapes:
+        empty = np.empty((0, 2))
+        return empty, empty, empty
+    pts = np.concatenate(shapes)
+    sizes = np.array([len(s) for s in shapes])
+    start, size = np.repeat(np.cumsum(sizes) - sizes, sizes), np.repeat(sizes, sizes)
+    local = np.arange(len(pts)) - start
+    return pts, pts[start + (local - 1) % size], pts[start + (local + 1) % size]
+
+
+def _free_angle(point, direction, pts: np.ndarray, before: np.ndarray, after: np.ndarray) -> float:
+    """:func:`free_angle` over the vertices `pts` of the shapes and their neighbours (see :func:`_corners`)."""
     base = math.atan2(direction[1], direction[0])
     best = 2 * math.pi
-    for shape in shapes:
-        near = np.flatnonzero(np.hypot(*(shape - point).T) < 1e-6)
-        for i in near:
-            for j in ((i - 1) % len(shape), (i + 1) % len(shape)):
-                d = shape[j] - point
-                if np.hypot(*d) < 1e-6:
-                    continue
-                cw = (base - math.atan2(d[1], d[0])) % (2 * math.pi)
-                if cw > 1e-9:
-                    best = min(best, cw)
+    near = np.hypot(pts[:, 0] - point[0], pts[:, 1] - point[1]) < 1e-6
+    for d in np.concatenate([before[near], after[near]]) - point:
+        if np.hypot(*d) < 1e-6:
+            continue
+        cw = (base - math.atan2(d[1], d[0])) % (2 * math.pi)
+        if cw > 1e-9:
+            best = min(best, cw)
     return best
+
+
+def _mirrored(points: np.ndarray) -> np.ndarray:
+    """`points` (..., 2) reflected in the x axis."""
+    out = np.array(points, dtype=float)
+    out[..., 1] = -out[..., 1]
+    return out
 
 
 def place_tabs(polys, piece_of, cuts, width, group: Symmetries | None = None):
@@ -193,21 +215,29 @@ def _tabs_centroid(poly: Polyhedron, mm_per_unit: float, copies: dict, placed: l
         u = (q - p) / np.hypot(*(q - p))
         local = np.column_stack([(tab - p) @ u, (tab - p) @ np.array([u[1], -u[0]])])  # along, outward
         x, y = local.T
-        x1, y1 = np.roll(x, -1), np.roll(y, -1)
+        turn = np.r_[1 : len(x), 0]
+        x1, y1 = x[turn], y[turn]
         cross = x * y1 - x1 * y
         area = cross.sum() / 2
         if abs(area) < tol.AREA:
             continue
         along, out = ((x + x1) * cross).sum() / (6 * area), ((y + y1) * cross).sum() / (6 * area)
-        glued = int(next(f for f in poly.edge_faces[e] if f != face))
-        start, end = poly.vertices[a], poly.vertices[b]
-        u3 = (end - start) / np.linalg.norm(end - start)
-        inward = np.cross(poly.normals[glued], u3)
-        if inward @ (poly.face_centroids[glued] - start) < 0:
-            inward = -inward
+        start, u3, inward = _glued_frame(poly, e, face, a, b)
         moment += abs(area) * (start + (along * u3 + out * inward) / mm_per_unit)
         total += abs(area)
     return moment / total if total > 0 else None
+
+
+@lru_cache(maxsize=4096)
+def _glued_frame(poly: Polyhedron, e: int, face: int, a: int, b: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where the tab on edge `e`'s copy on `face` lies once glued: vertex `a`, unit a->b, unit into the glued face."""
+    glued = int(next(f for f in poly.edge_faces[e] if f != face))
+    start, end = poly.vertices[a], poly.vertices[b]
+    u3 = (end - start) / np.linalg.norm(end - start)
+    inward = np.cross(poly.normals[glued], u3)
+    if inward @ (poly.face_centroids[glued] - start) < 0:
+        inward = -inward
+    return start, u3, inward
 
 
 def tab_offset(poly, mm_per_unit, copies, placed, group: Symmetries) -> float:
@@ -243,11 +273,11 @@ class Tabs:
     def _fit(self, face: int, p: np.ndarray, q: np.ndarray, factor: float) -> np.ndarray | None:
         """The tab `factor` times the width on copy (face, p, q) if it overlaps nothing in its piece, else None."""
         piece = self.piece_of[face]
-        ends = self._near(piece, np.array([p, q]), pad=1e-6)
+        corners = _corners(self._near(piece, np.array([p, q]), pad=1e-6))
         u = (q - p) / np.hypot(*(q - p))
-        # room at p turning clockwise from p->q, at q turning counter-clockwise from q->p
-        ap = min(math.pi / 4, 0.9 * free_angle(p, u, ends))
-        aq = min(math.pi / 4, 0.9 * free_angle_ccw(q, -u, ends))
+        # room at p turning clockwise from p->q, at q turning counter-clockwise from q->p (in the mirror image)
+        ap = min(math.pi / 4, 0.9 * _free_angle(p, u, *corners))
+        aq = min(math.pi / 4, 0.9 * _free_angle(_mirrored(q), _mirrored(-u), *map(_mirrored, corners)))
         if min(ap, aq) < math.radians(3):
             return None
         tab = trapezoid(p, q, factor * self.width, 1 / math.tan(ap), 1 / math.tan(aq))
@@ -332,8 +362,7 @@ def cell_size(polys: list[np.ndarray]) -> float:
 
 def free_angle_ccw(point, direction, shapes) -> float:
     """Counter-clockwise angle (rad) from `direction` at `point` to the nearest edge of `shapes` leaving it."""
-    mirrored = [np.column_stack([s[:, 0], -s[:, 1]]) for s in shapes]
-    return free_angle(np.array([point[0], -point[1]]), np.array([direction[0], -direction[1]]), mirrored)
+    return _free_angle(_mirrored(point), _mirrored(direction), *map(_mirrored, _corners(shapes)))
 
 
 def cut_copies(poly: Polyhedron, polys: list[np.ndarray], cut: list[int]):

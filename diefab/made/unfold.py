@@ -1,26 +1,11 @@
-"""Unfolding a convex polyhedron into a paper net with glue tabs.
+"""Unfolding a convex polyhedron into a paper net with glue tabs, on pages.
 
-The net is cut along the complement of a spanning tree of the face-adjacency
-graph (:mod:`.trees`): tree edges are folds, every other edge is cut and
-glued back with one trapezoidal tab (:mod:`.tabs`).  For small dice every spanning tree is tried; larger ones get
-a few hundred candidate trees (steepest-edge unfoldings towards many
-directions, random minimum spanning trees).  A layout is rejected when two
-faces overlap **or** a glue tab overlaps a face or another tab; tabs are
-placed while the layout is checked, narrowed or moved to the other face when
-they would collide.  Among valid layouts the one whose bounding rectangle,
-rotated to fit the page, has the smallest area wins; when no single piece
-fits, the net is split into several pieces that each fit a page, and the
-pieces are packed onto pages (:mod:`.pages`).
-
-The card of the tabs is part of the paper die's body (:mod:`diefab.made.bodies`),
-so on a symmetric die (:mod:`.symmetry`) the tabs are laid out to keep its
-symmetry: trees that the most symmetries map onto themselves are tried
-first, the tabs of each cut edge's orbit under those symmetries go on
-matching sides (edge ``g(e)`` gets its tab on face ``g(f)``) and take the
-orbit's common, narrowest shape, and among the valid layouts those whose
-tabs' centre of mass lies on the die's symmetry axis (within
-:data:`~diefab.core.tolerances.NET_TAB_OFFSET_MM`) come first.  The distance
-that remains is ``net.search["tab_offset_mm"]``.
+:func:`unfold` searches the layouts (:mod:`.layout`: which spanning tree to
+unfold along, where the glue tabs go), turns every piece to the angle that
+fits the page, packs the pieces onto pages (:mod:`.pages`) and letters the
+cut edges.  :func:`tab_shapes` gives the same search's tabs as they are glued
+inside the die, for the paper die's mass model: the net and the body are made
+from one :class:`~diefab.made.layout.NetLayout`, computed once for both.
 
 All lengths here are millimetres; layout coordinates have y pointing up, and
 the final page coordinates (in :class:`Net`) have y pointing down from the
@@ -37,50 +22,23 @@ Examples
 
 from __future__ import annotations
 
-import heapq
 import math
-from collections import deque
 from dataclasses import dataclass, field, replace
 from functools import cached_property, lru_cache
 
 import numpy as np
 
-from diefab.core import tolerances as tol
 from diefab.core.errors import FabricationError
-from diefab.geometry.flat import convex_hull, extents, fit_box, overlap, stack_polygons
+from diefab.geometry.flat import fit_box
 from diefab.geometry.polyhedron import Polyhedron
-from diefab.geometry.symmetry import Symmetries, symmetries
-from diefab.geometry.trees import all_trees, edge_key, edge_lookup, face_ring, heuristic_trees, spanning_tree_count
+from diefab.geometry.trees import edge_key, edge_lookup, face_ring
 from diefab.made.fill import TabShape
+from diefab.made.flatten import face_frames
+from diefab.made.layout import NetLayout, lay_out
 from diefab.made.pages import Page, parse_page, shelf
-from diefab.made.tabs import (
-    TAB_MIN_WIDTH,
-    TAB_WIDTH,
-    Grid,
-    Tab,
-    Tabs,
-    cell_size,
-    cut_copies,
-    place_tabs,
-    tab_offset,
-)
+from diefab.made.tabs import TAB_MIN_WIDTH, TAB_WIDTH, Tab
 
 __all__ = ["Net", "net_tab_shapes", "pack_copies", "tab_shapes", "unfold"]
-
-#: Spanning trees are enumerated when there are at most this many.
-TREE_LIMIT = 20_000
-#: Candidate trees for larger polyhedra.
-HEURISTIC_TREES = 400
-#: Face pairs checked for overlap over all heuristic trees: a die with many faces tries fewer trees.
-PAIR_BUDGET = 4e7
-#: Finalists (the layouts with the smallest faces-only footprint) whose tabs are
-#: built and whose exact bounding rectangle is measured: this many per number of
-#: the die's symmetries a tree keeps, twice this many in all.
-MAX_FINALISTS = 25
-#: Trees grown into pieces when no single piece fits, and the face count over which fewer are tried
-#: (a tree's pieces cost time in proportion to the faces).
-SPLIT_TREES = 12
-SPLIT_FACES = 2400
 
 
 @dataclass(frozen=True, eq=False)
@@ -162,145 +120,6 @@ class Net:
         return out
 
 
-# ----------------------------------------------------------------------
-# flat geometry
-
-
-def _face_frames(poly: Polyhedron, scale: float) -> list[np.ndarray]:
-    """Each face in its own plane frame, mm, counter-clockwise seen from outside."""
-    out = []
-    for k, f in enumerate(poly.faces):
-        p = poly.vertices[f] * scale
-        u = p[1] - p[0]
-        u /= np.linalg.norm(u)
-        w = np.cross(poly.normals[k], u)
-        out.append(np.column_stack([(p - p[0]) @ u, (p - p[0]) @ w]))
-    return out
-
-
-def _rigid(src_a, src_b, dst_a, dst_b) -> np.ndarray:
-    """3x3 rotation + translation taking segment src to segment dst."""
-    ang = math.atan2(*(dst_b - dst_a)[::-1]) - math.atan2(*(src_b - src_a)[::-1])
-    c, s = math.cos(ang), math.sin(ang)
-    rot = np.array([[c, -s], [s, c]])
-    out = np.eye(3)
-    out[:2, :2] = rot
-    out[:2, 2] = dst_a - rot @ src_a
-    return out
-
-
-def _hinges(poly: Polyhedron, local: list[np.ndarray]) -> np.ndarray:
-    """(e, 2, 3, 3): ``[e, 0]`` maps face ``edge_faces[e, 1]``'s frame into ``edge_faces[e, 0]``'s; ``[e, 1]`` back."""
-    out = np.empty((len(poly.edges), 2, 3, 3))
-    pos = [{int(v): i for i, v in enumerate(f)} for f in poly.faces]
-    for e, ((a, b), (fi, fj)) in enumerate(zip(poly.edges, poly.edge_faces)):
-        a, b = int(a), int(b)
-        m = _rigid(local[fj][pos[fj][a]], local[fj][pos[fj][b]], local[fi][pos[fi][a]], local[fi][pos[fi][b]])
-        out[e, 0] = m
-        out[e, 1] = np.linalg.inv(m)
-    return out
-
-
-def _rooted(poly: Polyhedron, tree: tuple[int, ...], root: int = 0):
-    """Parent face, hinge (edge, direction) and BFS order of a spanning tree rooted at `root`."""
-    m, ef = len(poly.faces), poly.edge_faces
-    adj: list[list[tuple[int, int, int]]] = [[] for _ in range(m)]
-    for e in tree:
-        a, b = int(ef[e, 0]), int(ef[e, 1])
-        adj[a].append((b, e, 0))  # child b in parent a's frame: hinge [e, 0]
-        adj[b].append((a, e, 1))
-    parent = np.full(m, -1)
-    parent[root] = root
-    hinge = np.full((m, 2), -1)
-    order, queue = [root], deque([root])
-    while queue:
-        f = queue.popleft()
-        for g, e, d in adj[f]:
-            if parent[g] < 0:
-                parent[g], hinge[g] = f, (e, d)
-                order.append(g)
-                queue.append(g)
-    return parent, hinge, order
-
-
-def _padded(local: list[np.ndarray]) -> np.ndarray:
-    """(m, K, 3) homogeneous coordinates, short faces padded by repeating their last vertex."""
-    flat = stack_polygons(local)
-    return np.concatenate([flat, np.ones((*flat.shape[:2], 1))], axis=2)
-
-
-def _place(trees: list[tuple[int, ...]], poly, hinges, padded) -> tuple[np.ndarray, list]:
-    """(T, m, K, 2) face polygons of every tree's layout, and each tree's rooting."""
-    m = len(poly.faces)
-    rel = np.tile(np.eye(3), (len(trees), m, 1, 1))
-    par = np.empty((len(trees), m), dtype=np.intp)
-    roots = []
-    for t, tree in enumerate(trees):
-        parent, hinge, order = _rooted(poly, tree)
-        roots.append((parent, hinge, order))
-        par[t] = parent
-        ok = hinge[:, 0] >= 0
-        rel[t, ok] = hinges[hinge[ok, 0], hinge[ok, 1]]
-    # pointer jumping: world[f] is the product of the hinges from the root down to f; each pass doubles
-    # the stretch of path it covers (the root's own transform is the identity, and its parent itself)
-    world = rel.copy()
-    rows = np.arange(len(trees))[:, None]
-    up = par.copy()
-    for _ in range(max(1, int(np.ceil(np.log2(max(m, 2)))))):
-        world = world[rows, up] @ world
-        up = up[rows, up]
-    return np.einsum("tmij,mkj->tmki", world, padded)[..., :2], roots
-
-
-def _count_overlaps(world: np.ndarray, sizes: list[int]) -> np.ndarray:
-    """(T,) number of overlapping face pairs in each layout of `world` (T, m, K, 2).
-
-    Pairs whose circumscribing circles are apart are skipped before the
-    separating-axis test.
-    """
-    t, m = world.shape[:2]
-    iu, ju = np.triu_indices(m, 1)
-    step = max(1, int(4e6 // len(iu)))  # layouts per pass: bounded memory for dice with many faces
-    if t > step:
-        return np.concatenate([_count_overlaps(world[k : k + step], sizes) for k in range(0, t, step)])
-    mask = np.arange(world.shape[2])[None, :] < np.array(sizes)[:, None]
-    centre = (world * mask[None, :, :, None]).sum(axis=2) / np.array(sizes)[None, :, None]
-    radius = np.linalg.norm(world - centre[:, :, None], axis=-1).max(axis=2)
-    near = np.linalg.norm(centre[:, iu] - centre[:, ju], axis=-1) < radius[:, iu] + radius[:, ju]
-    tt, pp = np.nonzero(near)
-    clash = np.zeros(t, dtype=np.intp)
-    for start in range(0, len(tt), 4096):
-        sl = slice(start, start + 4096)
-        hit = overlap(world[tt[sl], iu[pp[sl]]], world[tt[sl], ju[pp[sl]]])
-        np.add.at(clash, tt[sl][hit], 1)
-    return clash
-
-
-# ----------------------------------------------------------------------
-# the search
-
-
-@dataclass
-class _Layout:
-    tree: tuple[int, ...]
-    polys: list[np.ndarray]
-    piece_of: np.ndarray
-    parent: np.ndarray
-    tabs: list
-    fits: list[tuple[float, float]]  # (area, angle) per piece
-    offset: float = 0.0  # of the tabs' centre from the symmetry axis, mm
-    kept: int = 1  # symmetries that map the tabs (edge, face) onto themselves
-
-    @property
-    def area(self) -> float:
-        return sum(a for a, _ in self.fits)
-
-    @property
-    def key(self):
-        """Centred enough first, then the most symmetries kept, then the smallest, then the fewest pieces."""
-        return (max(self.offset, tol.NET_TAB_OFFSET_MM), -self.kept, self.area, len(self.fits))
-
-
 def unfold(
     poly: Polyhedron,
     mm_per_unit: float,
@@ -346,208 +165,28 @@ def unfold(
         raise FabricationError(f"mm_per_unit={mm_per_unit} must be a positive number")
     if not (math.isfinite(tab_width) and (tab_width >= TAB_MIN_WIDTH or tab_width == 0)):
         raise FabricationError(f"tab width {tab_width} mm must be 0 (no tabs) or at least {TAB_MIN_WIDTH:g} mm")
-    printable = page.printable
-    local = _face_frames(poly, mm_per_unit)
-    _check_size(local, printable, tab_width, size_mm)
-    hinges, padded = _hinges(poly, local), _padded(local)
-
-    count = spanning_tree_count(poly)
-    m, n_edges = len(poly.faces), len(poly.edges)
-    if count <= TREE_LIMIT and math.comb(n_edges, m - 1) <= 20 * TREE_LIMIT:
-        trees, method = all_trees(poly), "all spanning trees"
-    else:
-        count = max(8, min(HEURISTIC_TREES, int(PAIR_BUDGET / m**2)))
-        trees, method = heuristic_trees(poly, count, np.random.default_rng(seed)), "heuristic trees"
-
-    group = symmetries(poly)
-    keeps = _tree_symmetries(group, trees)  # (T, g): which symmetries map each tree onto itself
-    n_sym = keeps.sum(axis=1)
-    world, roots = _place(trees, poly, hinges, padded)
-    n_clash = _count_overlaps(world, [len(f) for f in poly.faces])
-    est = np.empty(len(trees))
-    fits_page = np.empty(len(trees), dtype=bool)
-    angles = np.deg2rad(np.arange(0.0, 180.0, 3.0))
-    for start in range(0, len(trees), 512):
-        w, h = extents(world[start : start + 512].reshape(-1, m * world.shape[2], 2), angles)
-        est[start : start + 512] = (w * h).min(axis=1)
-        # the faces alone must fit, allowing for the coarse grid
-        fits_page[start : start + 512] = ((w <= printable[0] * 1.03) & (h <= printable[1] * 1.03)).any(axis=1)
-
-    stats = {"method": method, "trees": len(trees), "spanning_trees": count, "overlap_free": int((n_clash == 0).sum()),
-             "symmetries": len(group)}  # fmt: skip
-    best: _Layout | None = None
-    tried: dict[int, int] = {}  # finalists per number of symmetries kept
-    # the trees that keep the most symmetries first, each group smallest first
-    order = np.lexsort((est, -n_sym, n_clash > 0))
-    for t in order:
-        if sum(tried.values()) >= 2 * MAX_FINALISTS:
-            break
-        if n_clash[t] or not fits_page[t] or tried.get(n_sym[t], 0) >= MAX_FINALISTS:
-            continue
-        if best is not None and est[t] * (1 - 0.03) > best.area and best.offset <= tol.NET_TAB_OFFSET_MM:
-            continue
-        tried[n_sym[t]] = tried.get(n_sym[t], 0) + 1
-        layout = _single_piece(
-            poly, trees[t], world[t], roots[t], tab_width, printable, group, group.subgroup(keeps[t]), mm_per_unit
-        )
-        if layout is not None and (best is None or layout.key < best.key):
-            best = layout
-            if not search:
-                break
-    stats["finalists"] = sum(tried.values())
-    if best is None:
-        # split: grow pieces along the trees with the smallest footprint, keep the fewest pieces
-        n_split = max(1, min(SPLIT_TREES, int(SPLIT_FACES / m))) if search else 1
-        for t in np.argsort(n_clash * 1e12 + est, kind="stable")[:n_split]:
-            layout = _split(poly, trees[t], world[t], roots[t], tab_width, printable)
-            if layout is not None and (best is None or (len(layout.fits), layout.area) < (len(best.fits), best.area)):
-                best = layout
-        if best is not None:
-            copies = dict(cut_copies(poly, best.polys, list(range(len(poly.edges)))))
-            best.offset = tab_offset(poly, mm_per_unit, copies, best.tabs, group)
-            best.kept = _kept(group, best.tabs)
-    if best is None:
-        raise FabricationError("cannot place glue tabs on this net; try a smaller --tab-width")
-    stats["pieces"] = len(best.fits)
-    stats["tab_offset_mm"] = best.offset
-    stats["tab_symmetries"] = best.kept if len(group) > 1 else 1
-    stats["symmetric_about"] = group.fixed_set
-    return _finish(poly, mm_per_unit, page, best, stats)
+    _check_size(face_frames(poly, mm_per_unit), page.printable, tab_width, size_mm)
+    layout = net_layout(poly, mm_per_unit, page.printable, tab_width, seed=seed, search=search)
+    return _finish(poly, mm_per_unit, page, layout)
 
 
-def _kept(group: Symmetries, tabs: list) -> int:
-    """How many symmetries map the tabs (which edge, on which face) onto themselves."""
-    own = {(e, f) for e, f, _ in tabs}
-    return sum({(int(ge[e]), int(gf[f])) for e, f in own} == own for ge, gf in zip(group.edge, group.face))
+@lru_cache(maxsize=64)
+def _layout_cached(key: tuple, poly: Polyhedron, mm_per_unit: float, printable: tuple, tab_width: float, seed: int,
+                   search: bool) -> NetLayout:  # fmt: skip
+    return lay_out(poly, mm_per_unit, printable, tab_width, seed=seed, search=search)
 
 
-def _tree_symmetries(group: Symmetries, trees: list[tuple[int, ...]]) -> np.ndarray:
-    """(T, g) bool: symmetry g maps tree t's edges onto themselves (then it maps the cut edges so too)."""
-    if len(group) == 1 or not trees:
-        return np.ones((len(trees), len(group)), dtype=bool)
-    edges = np.array(trees)
-    own = np.sort(edges, axis=1)
-    return np.stack([(np.sort(perm[edges], axis=1) == own).all(axis=1) for perm in group.edge], axis=1)
+def net_layout(
+    poly: Polyhedron, mm_per_unit: float, printable: tuple[float, float], tab_width: float, *, seed: int = 0,
+    search: bool = True,
+) -> NetLayout:  # fmt: skip
+    """:func:`~diefab.made.layout.lay_out`, remembered: the net and the mass model of one die share one search.
 
-
-def _single_piece(poly, tree, world_t, rooting, tab_width, printable, group, kept, mm_per_unit) -> _Layout | None:
-    """The layout of `tree` as one piece with its tabs, or None if it does not fit.
-
-    The tabs keep the symmetries `kept` (those that map the tree onto
-    itself) where they can; when they cannot keep them all (a mirror plane
-    that cuts across a cut edge leaves that edge no symmetric side), the
-    rotations among them are tried too, and the better layout is kept.
+    The result is shared between callers: read it, do not change it.
     """
-    m = len(poly.faces)
-    polys = [world_t[k, : len(poly.faces[k])] for k in range(m)]
-    piece_of = np.zeros(m, dtype=np.intp)
-    cut = sorted(set(range(len(poly.edges))) - set(tree))
-    copies = cut_copies(poly, polys, cut)
-    best = None
-    rotations = np.linalg.det(kept.matrices) > 0
-    for sub in (kept, kept.subgroup(rotations)):
-        tabs, failed = place_tabs(polys, piece_of, copies, tab_width, sub)
-        fit = None if failed is not None else fit_box(np.concatenate(polys + [t for _, _, t in tabs]), printable)
-        if fit is None:
-            layout = None
-        elif len(group) == 1:
-            return _Layout(tree, polys, piece_of, rooting[0], tabs, [fit])
-        else:
-            offset = tab_offset(poly, mm_per_unit, dict(copies), tabs, group)
-            layout = _Layout(tree, polys, piece_of, rooting[0], tabs, [fit], offset, _kept(group, tabs))
-        if layout is not None and (best is None or layout.key < best.key):
-            best = layout
-        if (best is not None and best.kept >= len(kept)) or rotations.all():
-            break
-    return best
-
-
-def _split(poly, tree, world_t, rooting, tab_width, printable) -> _Layout | None:
-    """Grow pieces along the tree.
-
-    A face joins its parent's piece if it overlaps nothing there and the
-    piece, with a tab's width all round, still fits the page.
-    """
-    parent, _, order = rooting
-    m = len(poly.faces)
-    polys = [world_t[k, : len(poly.faces[k])] for k in range(m)]
-    piece_of = np.full(m, -1, dtype=np.intp)
-    cell = cell_size(polys)
-    grids: list[Grid] = []
-    hulls: list[np.ndarray] = []  # each piece's convex hull so far: its fit is the fit of all its faces
-    n_pieces = 0
-    for f in order:
-        p = int(parent[f])
-        if p != f:
-            k = int(piece_of[p])
-            near = grids[k].near(polys[f])
-            if not (near and overlap(stack_polygons([polys[g] for g in near]), polys[f]).any()):
-                pts = np.concatenate([hulls[k], polys[f]])
-                if fit_box(pts, printable, margin=tab_width) is not None:
-                    piece_of[f] = k
-                    grids[k].add(f, polys[f])
-                    hulls[k] = convex_hull(pts)
-                    continue
-        piece_of[f] = n_pieces
-        grids.append(Grid(cell))
-        grids[-1].add(f, polys[f])
-        hulls.append(polys[f])
-        n_pieces += 1
-    children: list[list[int]] = [[] for _ in range(m)]
-    for f in range(m):
-        if parent[f] != f:
-            children[int(parent[f])].append(f)
-    at_vertex: dict[int, list[int]] = {}
-    for k, ring in enumerate(poly.faces):
-        for v in ring.tolist():
-            at_vertex.setdefault(v, []).append(k)
-    # tabs longest edge first; an edge that takes none detaches a face next to it, with its subtree, into a
-    # piece of its own (the fold it hung from is cut and queued) and is tried again
-    ef = poly.edge_faces
-    folds = {e for e in tree if piece_of[ef[e, 0]] == piece_of[ef[e, 1]]}
-    copies = dict(cut_copies(poly, polys, list(range(len(poly.edges)))))
-    queue = [(-round(float(np.hypot(*(c[0][2] - c[0][1]))), 6), e) for e, c in copies.items() if e not in folds]
-    heapq.heapify(queue)
-    tabs = Tabs(polys, piece_of, tab_width)
-    for _ in range(m + len(copies) + 1):
-        if not queue or tab_width == 0:
-            break
-        length, failed = queue[0]
-        if tabs.place(failed, copies[failed]):
-            heapq.heappop(queue)
-            continue
-        around = sorted({k for v in poly.edges[failed].tolist() for k in at_vertex[v]} - set(ef[failed].tolist()))
-        pieces = {int(piece_of[k]) for k in ef[failed]}
-        movable = [
-            int(f)
-            for f in [*ef[failed], *around]
-            if parent[f] != f and piece_of[parent[f]] == piece_of[f] and piece_of[f] in pieces
-        ]
-        if not movable:
-            return None
-        f = movable[0]
-        old, stack = piece_of[f], [f]
-        while stack:
-            g = stack.pop()
-            piece_of[g] = n_pieces
-            stack.extend(h for h in children[g] if piece_of[h] == old)
-        n_pieces += 1
-        hinge = next(e for e in folds if set(ef[e].tolist()) == {f, int(parent[f])})
-        folds.discard(hinge)
-        heapq.heappush(queue, (-round(float(np.hypot(*(copies[hinge][0][2] - copies[hinge][0][1]))), 6), hinge))
-    else:
-        return None
-    tabs = tabs.placed
-    fits = []
-    for k in range(n_pieces):
-        pts = np.concatenate(
-            [polys[f] for f in np.flatnonzero(piece_of == k)] + [t for _, f, t in tabs if piece_of[f] == k]
-        )
-        fit = fit_box(pts, printable)
-        if fit is None:
-            return None
-        fits.append(fit)
-    return _Layout(tuple(sorted(folds)), polys, piece_of, parent, tabs, fits)
+    key = (poly.vertices.tobytes(), tuple(tuple(int(v) for v in f) for f in poly.faces))
+    printable = (float(printable[0]), float(printable[1]))
+    return _layout_cached(key, poly, float(mm_per_unit), printable, float(tab_width), int(seed), bool(search))
 
 
 def _check_size(local, printable, tab_width, size_mm) -> None:
@@ -573,7 +212,7 @@ def _check_size(local, printable, tab_width, size_mm) -> None:
     )
 
 
-def _finish(poly, mm_per_unit, page: Page, layout: _Layout, stats) -> Net:
+def _finish(poly, mm_per_unit, page: Page, layout: NetLayout) -> Net:
     """Rotate every piece to its chosen angle, pack pieces onto pages, label the cut edges."""
     m = len(poly.faces)
     printable = page.printable
@@ -637,7 +276,7 @@ def _finish(poly, mm_per_unit, page: Page, layout: _Layout, stats) -> Net:
         fold_edges=folds,
         tabs=tabs_out,
         edge_labels=letter_of,
-        search=stats,
+        search=dict(layout.stats),
     )
 
 
@@ -689,35 +328,34 @@ def pack_copies(net: Net, copies: int) -> tuple[Net, ...]:
 # the tabs of a net, for the mass model
 
 
+def _tab_shape(poly: Polyhedron, ring: np.ndarray, edge: int, face: int, polygon: np.ndarray) -> TabShape:
+    """The tab `polygon` on `edge`'s copy on `face` (laid out as `ring`), as a shape on the die's edge."""
+    p, q, far_q, far_p = polygon
+    i = int(np.argmin(np.linalg.norm(ring - p, axis=1)))
+    n = len(ring)
+    a, b = int(poly.faces[face][i]), int(poly.faces[face][(i + 1) % n])
+    u = (q - p) / np.linalg.norm(q - p)
+    normal = np.array([-u[1], u[0]])
+    width = abs(float((far_p - p) @ normal))
+    lean_a = float((far_p - p) @ u) / width
+    lean_b = float((q - far_q) @ u) / width
+    faces = poly.edge_faces[edge]
+    glued = int(faces[0] if faces[1] == face else faces[1])
+    return TabShape(a, b, glued, width, lean_a, lean_b)
+
+
 def net_tab_shapes(net: Net) -> tuple[TabShape, ...]:
     """The tabs of a laid-out net, as :class:`~diefab.made.fill.TabShape` on the die's edges."""
-    poly = net.poly
-    out = []
-    for tab in net.tabs:
-        ring = net.faces[tab.face]
-        p, q, far_q, far_p = tab.polygon
-        i = int(np.argmin(np.linalg.norm(ring - p, axis=1)))
-        n = len(ring)
-        a, b = int(poly.faces[tab.face][i]), int(poly.faces[tab.face][(i + 1) % n])
-        u = (q - p) / np.linalg.norm(q - p)
-        normal = np.array([-u[1], u[0]])
-        width = abs(float((far_p - p) @ normal))
-        lean_a = float((far_p - p) @ u) / width
-        lean_b = float((q - far_q) @ u) / width
-        faces = poly.edge_faces[tab.edge]
-        glued = int(faces[0] if faces[1] == tab.face else faces[1])
-        out.append(TabShape(a, b, glued, width, lean_a, lean_b))
-    return tuple(out)
-
-
-@lru_cache(maxsize=64)
-def _tabs_cached(key: bytes, faces: tuple, poly: Polyhedron, mm_per_unit: float, tab_mm: float):
-    return net_tab_shapes(unfold(poly, mm_per_unit, tab_width=tab_mm))
+    return tuple(_tab_shape(net.poly, net.faces[t.face], t.edge, t.face, t.polygon) for t in net.tabs)
 
 
 def tab_shapes(poly: Polyhedron, mm_per_unit: float, tab_mm: float) -> tuple[TabShape, ...]:
-    """The glue tabs of the net of `poly` that ``diefab net`` lays out on A4 (none when `tab_mm` is 0)."""
+    """The glue tabs of the net of `poly` that :func:`unfold` lays out on A4 (none when `tab_mm` is 0).
+
+    They come from the same search as the net's (:func:`net_layout`), without
+    turning and packing its pieces onto pages; the shapes do not depend on where a piece lies.
+    """
     if tab_mm == 0:
         return ()
-    faces = tuple(tuple(int(v) for v in f) for f in poly.faces)
-    return _tabs_cached(poly.vertices.tobytes(), faces, poly, float(mm_per_unit), float(tab_mm))
+    layout = net_layout(poly, mm_per_unit, parse_page("A4").printable, tab_mm)
+    return tuple(_tab_shape(poly, layout.polys[f], e, f, t) for e, f, t in layout.tabs)
