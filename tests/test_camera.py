@@ -59,6 +59,51 @@ def test_pose_of_a_rendered_die_is_the_true_pose():
     assert face == 2 and confidence > 0.5
 
 
+def test_a_pose_uncertain_only_about_the_line_of_sight_keeps_its_face():
+    from diefab.camera.pose import LENS_DEG, _margin_sigmas
+
+    design = load_design("d6")
+    normals = design.polyhedron.normals
+    down = np.array([0.0, 0.0, 1.0])
+    face = int(np.argmax(normals @ down))  # the face whose normal is +z rests on the table as it stands
+    spin = np.diag([0.0, 0.0, 0.3**2])  # a rotation about the camera's axis moves no face toward down
+    tilt = np.diag([0.3**2, 0.0, 0.0])
+    calm = _margin_sigmas(np.eye(3), spin, 30.0, normals, face, down)
+    shaky = _margin_sigmas(np.eye(3), tilt, 30.0, normals, face, down)
+    # the next faces are 90 degrees away: half the gap, 45 degrees, over the lens's error alone
+    assert calm.min() == pytest.approx(45.0 / LENS_DEG, rel=1e-3)
+    assert shaky.min() < 3.0  # a tilt of 0.3 rad (17 degrees) standard error leaves 45 degrees under 3 sigma
+
+
+def test_grown_markers_leave_the_label_its_room():
+    from shapely.geometry import Polygon
+    from shapely.ops import polylabel
+
+    from diefab.dice.design import Design, design_axis
+    from diefab.dice.markers import LABEL_ROOM
+    from diefab.made.labels import face_frame
+
+    thin = Design(
+        name="bipyramid-24", family="bipyramid", params={"n": 12, "h": 1.0},
+        values={f"f{i + 1}": i + 1 for i in range(24)}, target="uniform:24", size_mm=30.0,
+    )  # fmt: skip
+    for design in (thin, load_design("d20")):
+        poly, layout, axis = design.polyhedron, marker_layout(design), design_axis(design)
+        for row, k in enumerate(layout.faces):
+            ring = poly.vertices[poly.faces[k]]
+            u, v = face_frame(ring, poly.normals[k], axis)
+            origin = ring.mean(axis=0)
+            face = Polygon(np.column_stack([(ring - origin) @ u, (ring - origin) @ v]))
+            inradius = face.exterior.distance(polylabel(face, 1e-6))
+            square = Polygon(layout.squares(row, (origin, u, v)))
+            assert face.contains(square)
+            rest = face.difference(square.buffer(0.1 * layout.sides[row], join_style="mitre"))
+            rest = max(getattr(rest, "geoms", [rest]), key=lambda g: g.area)
+            assert rest.exterior.distance(polylabel(rest, 1e-6)) >= 0.9 * LABEL_ROOM * inradius
+            # and the marker is larger than a fixed share of the face would give
+            assert layout.sides[row] > 0.8 * inradius
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["d6", "fudge-gem", "d20"])
 def test_rendered_rests_are_never_read_wrong(name):
@@ -134,6 +179,8 @@ def test_read_command_logs_one_roll_per_photo_and_refuses_bad_input(tmp_path, ca
     assert stop.value.code == 0
     rows = read_log(tmp_path / "out" / "d6-rolls.csv").rolls
     assert len(rows) == 4
+    read = sum(r.value is not None for r in rows)
+    assert f"{read} rolls: TVD" in capsys.readouterr().out  # the verdict, as roll gives it
     assert all(r.value in (t, None) for r, t in zip(rows, truth))
     for args in (["--video", str(tmp_path / "missing.avi")], ["--images", str(tmp_path / "out")], []):
         with pytest.raises(SystemExit) as stop:

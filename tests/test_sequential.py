@@ -11,6 +11,7 @@ from scipy.special import gammaln
 
 from diefab.core.errors import StatsError
 from diefab.dice.targets import parse_target
+from diefab.stats import confidence_sequence
 from diefab.stats import sequential as seq
 from diefab.stats.goodness import tvd
 from diefab.stats.sequential import (
@@ -96,13 +97,13 @@ def test_conservative_bound_above_exact_values_is_wider(monkeypatch):
     t = parse_target("uniform:6").probabilities
     counts = np.array([50, 61, 40, 55, 47, 52], float)
     exact = tvd_bounds(counts, t)[1]
-    monkeypatch.setattr(seq, "EXACT_VALUES", 3)
+    monkeypatch.setattr(confidence_sequence, "EXACT_VALUES", 3)
     wide = tvd_bounds(counts, t)[1]
     assert wide >= exact - 1e-12
     # a "within" from the wide bound is a "within" from the exact one
     rows = np.array([counts * m for m in (1, 10, 100, 1000)])
     loose = within_reached(rows, t, 0.05)
-    monkeypatch.setattr(seq, "EXACT_VALUES", 16)
+    monkeypatch.setattr(confidence_sequence, "EXACT_VALUES", 16)
     assert np.all(within_reached(rows, t, 0.05)[loose])
 
 

@@ -108,10 +108,30 @@ def test_roll_refuses_a_second_process_and_needs_a_terminal(bad, tmp_path):
     pytest.importorskip("textual")
     from diefab.core.files import ExclusiveLock
 
-    with ExclusiveLock(tmp_path / "d6.rolls.csv", "a roll log"):
+    with ExclusiveLock(tmp_path / "d6-rolls.csv", "a roll log"):
         assert f"is in use by process {os.getpid()}" in bad("roll", "d6", "--out", tmp_path)
     assert "needs a terminal" in bad("roll", "d6", "--out", tmp_path)
     assert not list(tmp_path.glob(".*.lock"))  # the lock file goes with the lock
+
+
+def test_read_and_roll_share_one_log_name_and_resume_an_old_one(tmp_path):
+    from diefab.stats.rolllog import log_path
+
+    assert log_path(tmp_path, "d6") == tmp_path / "d6-rolls.csv"
+    old = tmp_path / "d6.rolls.csv"
+    append_roll(old, Roll.now(3))
+    assert log_path(tmp_path, "d6") == old  # a log saved under the former name is resumed
+    append_roll(tmp_path / "d6-rolls.csv", Roll.now(4))
+    assert log_path(tmp_path, "d6") == tmp_path / "d6-rolls.csv"
+
+
+def test_tally_add_counts_a_value_and_refuses_a_foreign_one():
+    tally = Tally([1, 2, 3], [0.2, 0.3, 0.5], 0.1)
+    tally.add(3)
+    tally.add(3)
+    assert tally.counts.tolist() == [0, 0, 2] and tally.result().n == 2
+    with pytest.raises(StatsError, match="not a value of the die"):
+        tally.add(7)
 
 
 def _roll_in_a_terminal(folder, keys: bytes, close: bool) -> int:
@@ -155,8 +175,8 @@ def test_roll_in_a_terminal_keeps_every_roll_and_leaves_no_lock_file(tmp_path, c
     pytest.importorskip("textual")
     status = _roll_in_a_terminal(tmp_path, b"6613", close)
     assert status == (130 if close else 0)
-    assert read_log(tmp_path / "d6.rolls.csv").values.tolist() == [6, 6, 1, 3]
-    assert [p.name for p in tmp_path.iterdir()] == ["d6.rolls.csv"]  # the lock file went with the lock
+    assert read_log(tmp_path / "d6-rolls.csv").values.tolist() == [6, 6, 1, 3]
+    assert [p.name for p in tmp_path.iterdir()] == ["d6-rolls.csv"]  # the lock file went with the lock
 
 
 def test_roll_app_records_every_key_in_the_log(tmp_path):

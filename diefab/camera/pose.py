@@ -92,8 +92,9 @@ class Pose:
     rotation : (3, 3) float, model coordinates -> camera; translation : (3,) float, mm (the model origin).
     markers : ids of the markers that agree with the pose; error : RMS reprojection error, pixels;
     scale : mean image side of those markers, pixels; alternative : the other planar solution (rotation) of a
-    one-marker pose when it fits almost as well; spread_deg : the rotation's standard error, degrees (from the
-    solve's Jacobian and the corners' scatter).
+    one-marker pose when it fits almost as well; spread_deg : the rotation's standard error along its worst
+    axis, degrees (from the solve's Jacobian and the corners' scatter); covariance : (3, 3) float, the
+    covariance of the rotation's Rodrigues vector, rad^2 (None: unknown).
     """
 
     rotation: np.ndarray
@@ -103,6 +104,7 @@ class Pose:
     scale: float
     alternative: np.ndarray | None = None
     spread_deg: float = 0.0
+    covariance: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -274,16 +276,17 @@ def solve_pose(
     proj = _project(objects[inliers].reshape(-1, 3), rotation, translation, camera)
     error = float(np.sqrt(np.mean(np.sum((proj - images[inliers].reshape(-1, 2)) ** 2, axis=1))))
     scale = float(np.linalg.norm(images[inliers] - np.roll(images[inliers], 1, axis=1), axis=2).mean())
-    spread = _rotation_spread(objects[inliers].reshape(-1, 3), rotation, translation, camera, error)
+    spread, covariance = _rotation_spread(objects[inliers].reshape(-1, 3), rotation, translation, camera, error)
     ids_in = tuple(int(m) for m in marker_ids[inliers])
-    return Pose(rotation, translation, ids_in, error, scale, alternative, spread)
+    return Pose(rotation, translation, ids_in, error, scale, alternative, spread, covariance)
 
 
-def _rotation_spread(objects, rotation, translation, camera, error: float) -> float:
-    """Standard error of the pose's rotation, degrees: corner scatter through the solve's Jacobian.
+def _rotation_spread(objects, rotation, translation, camera, error: float) -> tuple[float, np.ndarray | None]:
+    """Standard error of the pose's rotation along its worst axis (degrees) and its covariance (rad^2).
 
-    The corners scatter by the RMS reprojection error (at least :data:`CORNER_PX`); an uncalibrated lens
-    adds :data:`LENS_DEG`.
+    Corner scatter through the solve's Jacobian: the corners scatter by the RMS reprojection error (at
+    least :data:`CORNER_PX`); an uncalibrated lens adds :data:`LENS_DEG` to the standard error.  The
+    covariance is that of the rotation's Rodrigues vector, lens not included.
     """
     import cv2
 
@@ -294,9 +297,10 @@ def _rotation_spread(objects, rotation, translation, camera, error: float) -> fl
     try:
         cov = sigma**2 * np.linalg.inv(j.T @ j)
     except np.linalg.LinAlgError:
-        return 90.0
-    worst = float(np.sqrt(max(np.linalg.eigvalsh(cov[:3, :3]).max(), 0.0)))
-    return float(np.hypot(np.degrees(worst), LENS_DEG))
+        return 90.0, None
+    rot = cov[:3, :3]
+    worst = float(np.sqrt(max(np.linalg.eigvalsh(rot).max(), 0.0)))
+    return float(np.hypot(np.degrees(worst), LENS_DEG)), rot
 
 
 def _refine(objects, images, rotation, translation, camera):
@@ -319,6 +323,39 @@ def _resting(rotation: np.ndarray, normals: np.ndarray, down: np.ndarray) -> tup
     return int(order[0]), float(a1), float(a2)
 
 
+def _half_gaps(rvec: np.ndarray, normals: np.ndarray, face: int, down: np.ndarray) -> np.ndarray:
+    """(n,) float: half the angle by which each face is farther from `down` than `face`, radians."""
+    import cv2
+
+    cos = np.clip(normals @ cv2.Rodrigues(rvec)[0].T @ down, -1, 1)
+    angles = np.arccos(cos)
+    return (angles - angles[face]) / 2
+
+
+def _margin_sigmas(rotation, covariance, spread_deg: float, normals, face: int, down: np.ndarray) -> np.ndarray:
+    """(n - 1,) float: for each other face, the half gap to `face` in standard errors.
+
+    The half gap's standard error is the rotation's covariance carried along the gap's own gradient (a
+    rotation about the line of sight, say, changes no gap), with :data:`LENS_DEG` added: a pose that is
+    uncertain only in directions that keep the same face down is trusted.
+    """
+    import cv2
+
+    rvec = cv2.Rodrigues(rotation)[0].ravel()
+    gaps = _half_gaps(rvec, normals, face, down)
+    near = np.flatnonzero(np.arange(len(gaps)) != face)
+    if len(near) == 0:
+        return np.array([np.inf])
+    lens = np.radians(LENS_DEG)
+    if covariance is None:  # the worst axis's standard error, which already holds the lens's
+        sigma = np.full(len(near), np.radians(spread_deg))
+        return gaps[near] / sigma
+    step = 1e-6
+    grad = np.array([(_half_gaps(rvec + step * e, normals, face, down)[near] - gaps[near]) / step for e in np.eye(3)])
+    var = np.einsum("in,ij,jn->n", grad, covariance, grad)
+    return gaps[near] / np.sqrt(np.maximum(var, 0.0) + lens**2)
+
+
 def _ramp(x: float, full: float, zero: float) -> float:
     """1 at `full` or better, 0 at `zero` or worse, linear between."""
     return float(np.clip((zero - x) / (zero - full), 0.0, 1.0))
@@ -328,9 +365,10 @@ def read_pose(pose: Pose, design: Design, down: np.ndarray = DOWN) -> tuple[int,
     """The resting face of `pose` and the confidence of that reading.
 
     The confidence is the product of three ramps: half the angle between
-    the chosen face and the next one (the pose error that would flip the
-    choice) in standard errors of the pose's rotation (:data:`SAFE_SIGMAS`)
-    and in degrees (:data:`SAFE_DEG`),
+    the chosen face and each face near it (the pose error that would flip
+    the choice), in standard errors of that angle (:data:`SAFE_SIGMAS`: the
+    pose's rotation covariance carried along the angle's gradient) and, for
+    the next face, in degrees (:data:`SAFE_DEG`),
     the chosen face's tilt from `down`
     (:data:`FLAT_DEG`: a die leaning on something is not at rest on a face)
     and the reprojection error relative to the markers' image size
@@ -344,19 +382,23 @@ def read_pose(pose: Pose, design: Design, down: np.ndarray = DOWN) -> tuple[int,
     """
     poly = design.polyhedron
     down = np.asarray(down, dtype=float) / np.linalg.norm(down)
+    face, a1, a2 = _resting(pose.rotation, poly.normals, down)
+    covariance = pose.covariance
     rotation = pose.rotation
-    face, a1, a2 = _resting(rotation, poly.normals, down)
     if pose.alternative is not None:
         # one marker alone has two planar solutions; a die at rest lies flat, which rules out most wrong ones
-        other = _resting(pose.alternative, poly.normals, down)
-        flat = [s for s in ((face, a1, a2), other) if s[1] <= FLAT_DEG[1]]
-        if len(flat) == 2 and flat[0][0] != flat[1][0]:
+        options = [((face, a1, a2), pose.rotation), (_resting(pose.alternative, poly.normals, down), pose.alternative)]
+        flat = [o for o in options if o[0][1] <= FLAT_DEG[1]]
+        if len(flat) == 2 and flat[0][0][0] != flat[1][0][0]:
             return face, 0.0
         if flat:
-            face, a1, a2 = min(flat, key=lambda s: s[1])
+            (face, a1, a2), chosen = min(flat, key=lambda o: o[0][1])
+            if chosen is not pose.rotation:
+                rotation, covariance = chosen, None  # the covariance is the other solution's
     half = (a2 - a1) / 2
+    sigmas = _margin_sigmas(rotation, covariance, pose.spread_deg, poly.normals, face, down)
     safety = min(
-        _ramp(-half / max(pose.spread_deg, 1e-9), -SAFE_SIGMAS[0], -SAFE_SIGMAS[1]),
+        _ramp(-float(sigmas.min()), -SAFE_SIGMAS[0], -SAFE_SIGMAS[1]),
         _ramp(-half, -SAFE_DEG[0], -SAFE_DEG[1]),
     )
     confidence = safety * _ramp(a1, *FLAT_DEG)

@@ -73,7 +73,11 @@ def _finger(rng: np.random.Generator, centre: np.ndarray, radius: float, reach=(
 def rendered_rests(
     design: Design, layout: MarkerLayout, n: int, seed: int, *, finger: float = 0.15
 ) -> Iterator[RenderedRest]:
-    """`n` rendered rests; each draws its own view and conditions from ``(seed, i)``."""
+    """`n` rendered rests; each draws its own view and conditions from ``(seed, i)``.
+
+    A share `finger` of them has a finger from outside the die reaching to 0.6-1 of its image radius
+    from its centre (``occluded``); no other finger is drawn.
+    """
     poly = design.polyhedron
     resting = [k for k, name in enumerate(poly.names) if name in design.values]
     textures: dict = {}
@@ -82,7 +86,7 @@ def rendered_rests(
         view = random_view(rng, design)
         face = int(rng.choice(resting))
         rotation, position = rest_pose(design, face, rng.uniform(0, 2 * np.pi), _spot(rng, view))
-        conditions = random_conditions(rng, view)
+        conditions = random_conditions(rng, view, finger=0.0)  # the one finger a rest may have is drawn below
         occluded = bool(rng.random() < finger)
         if occluded:
             conditions = replace(conditions, finger=_finger(rng, *_image_circle(design, view, rotation, position)))

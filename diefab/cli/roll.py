@@ -8,9 +8,7 @@ from pathlib import Path
 import click
 
 from diefab.cli.common import design_argument, get_design
-
-#: Width of the longest bar, in characters.
-BAR_WIDTH = 36
+from diefab.cli.live import bars
 
 
 @click.command()
@@ -18,7 +16,7 @@ BAR_WIDTH = 36
 @click.option("--target", default=None, help="Override the design's target distribution.")
 @click.option("--out", "out", type=click.Path(file_okay=False, path_type=Path), default=Path("."), show_default=True,
               help="Folder of the roll log.")  # fmt: skip
-@click.option("--name", default=None, help="Name of the roll log, OUT/NAME.rolls.csv (default: the design's name).")
+@click.option("--name", default=None, help="Name of the roll log, OUT/NAME-rolls.csv (default: the design's name).")
 @click.option("--delta", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.03, show_default=True,
               help="Tolerance in TVD of the verdict: within it of the target, or off by at least it.")  # fmt: skip
 def roll(design, params, target, out, name, delta) -> None:
@@ -30,14 +28,14 @@ def roll(design, params, target, out, name, delta) -> None:
     """
     from diefab.core.errors import StatsError
     from diefab.core.extras import require
-    from diefab.core.files import ensure_dir, hold_lock, output_path
-    from diefab.stats.rolllog import read_log, repair_log
+    from diefab.core.files import ensure_dir, hold_lock
+    from diefab.stats.rolllog import log_path, read_log, repair_log
     from diefab.stats.tally import Tally
     from diefab.stats.verdict import sequential_line, target_label
 
     require("textual", "tally", "diefab roll")
     d = get_design(design, params, target)
-    path = output_path(ensure_dir(out), name or d.name, ".rolls.csv")
+    path = log_path(ensure_dir(out), name or d.name)
     hold_lock(path, f"roll log {path}")  # one writer per log, until the command ends
     if not (sys.stdin.isatty() and sys.stdout.isatty()):
         raise StatsError("diefab roll needs a terminal (it reads one key per roll)")
@@ -48,31 +46,6 @@ def roll(design, params, target, out, name, delta) -> None:
     app.run()
     click.echo(sequential_line(tally.result(), label))
     click.echo(f"roll log: {path} ({tally.n} rolls)")
-
-
-def bars(tally, width: int = BAR_WIDTH):
-    """A rich table: value, key, count, observed and target frequency as bars."""
-    from rich.table import Table
-    from rich.text import Text
-
-    from diefab.dice.design import format_value
-
-    n = tally.n
-    observed = tally.counts / n if n else tally.counts * 0.0
-    top = max(float(tally.target.max()), float(observed.max()), 1e-12)
-    signed = min(tally.values) < 0
-    table = Table("key", "value", "count", "observed", "target", "observed \u2588 target \u2502", box=None)
-    for key, value, count, o, t in zip(tally.keys, tally.values, tally.counts, observed, tally.target):
-        bar = [" "] * (width + 1)
-        filled = int(round(o / top * width))
-        for i in range(filled):
-            bar[i] = "\u2588"
-        bar[int(round(t / top * width))] = "\u2502"
-        table.add_row(
-            f"[bold]{key}[/bold]", format_value(value, signed), str(int(count)), f"{o:.3f}", f"{t:.3f}",
-            Text("".join(bar), style="cyan"),
-        )  # fmt: skip
-    return table
 
 
 def roll_app(tally, path: Path, title: str, label: str):

@@ -54,8 +54,12 @@ DICTIONARIES = (
 )
 #: Free border between a face's edge and its marker, as a fraction of the face's inscribed radius.
 MARGIN_FRACTION = 0.12
-#: Side of a marker that shares its face with a value label, as a fraction of the largest square that fits.
+#: Side of a marker that shares its face with a value label, as a fraction of the largest square that fits
+#: centred; the marker grows past it while the label keeps :data:`LABEL_ROOM`.
 LABEL_SHARE = 0.62
+#: Room left for a value label beside a grown marker: the inradius of what is left of the face, as a fraction
+#: of the face's inradius.  A thin face (a bipyramid's) fits a larger marker toward its base this way.
+LABEL_ROOM = 0.55
 #: A face whose marker would be smaller than this fraction of the die's reference size carries none.
 MIN_SIDE_FRACTION = 0.08
 
@@ -131,25 +135,57 @@ def _largest_square(region, center) -> float:
     return lo
 
 
-def _slide(region, center, side: float, direction: np.ndarray) -> np.ndarray:
-    """The centre farthest along `direction` from `center` at which a square of `side` stays inside `region`."""
+def _room(region, center: np.ndarray, side: float) -> float:
+    """Inradius of what `region` keeps for a label beside a square of `side` at `center` (and a gap)."""
+    import shapely
+    from shapely.ops import polylabel
+
+    gap = 0.1 * side
+    rest = region.difference(shapely.box(*(center - side / 2 - gap), *(center + side / 2 + gap)))
+    if rest.geom_type != "Polygon":
+        rest = max(getattr(rest, "geoms", []), key=lambda g: g.area, default=None)
+    return 0.0 if rest is None or rest.is_empty else rest.exterior.distance(polylabel(rest, 1e-3 * side))
+
+
+def _reach(region, center, side: float, direction: np.ndarray) -> np.ndarray | None:
+    """The centre farthest along `direction` from `center` at which a square of `side` fits in `region`, or None."""
     import shapely
 
     x0, y0, x1, y1 = region.bounds
-    lo, hi = 0.0, max(x1 - x0, y1 - y0)
     h = side / 2
-    for _ in range(40):
+
+    def fits(t: float) -> bool:
+        c = center + t * direction
+        return region.contains(shapely.box(c[0] - h, c[1] - h, c[0] + h, c[1] + h))
+
+    ts = np.linspace(0.0, max(x1 - x0, y1 - y0), 33)
+    ok = [i for i, t in enumerate(ts) if fits(t)]
+    if not ok:
+        return None
+    lo, hi = ts[ok[-1]], ts[min(ok[-1] + 1, len(ts) - 1)]
+    for _ in range(30):
         mid = 0.5 * (lo + hi)
-        c = center + mid * direction
-        if region.contains(shapely.box(c[0] - h, c[1] - h, c[0] + h, c[1] + h)):
-            lo = mid
-        else:
-            hi = mid
+        lo, hi = (mid, hi) if fits(mid) else (lo, mid)
     return center + lo * direction
 
 
-def _place(region, labelled: bool) -> tuple[float, np.ndarray]:
-    """Side and centre of the marker in a face region (label-frame coordinates)."""
+#: Directions a labelled face's marker is pushed in, in the order that breaks ties: below the label, above, left, right.
+_DIRECTIONS = tuple(np.array(d) for d in ((0.0, -1.0), (0.0, 1.0), (-1.0, 0.0), (1.0, 0.0)))
+
+
+def _beside_label(region, center, side: float) -> tuple[float, np.ndarray] | None:
+    """The placement of a square of `side` pushed to the side that leaves the label the most room."""
+    options = [(_room(region, c, side), c) for d in _DIRECTIONS if (c := _reach(region, center, side, d)) is not None]
+    return max(options, key=lambda o: o[0]) if options else None  # max keeps the first of equals
+
+
+def _place(region, labelled: bool, inradius: float) -> tuple[float, np.ndarray]:
+    """Side and centre of the marker in a face region (label-frame coordinates).
+
+    An unlabelled face carries the largest square centred in it.  A labelled face carries a square of
+    :data:`LABEL_SHARE` of that, pushed aside for the label, grown as long as the label keeps a room of
+    :data:`LABEL_ROOM` times the face's `inradius`.
+    """
     import shapely
     from shapely.ops import polylabel
 
@@ -164,17 +200,18 @@ def _place(region, labelled: bool) -> tuple[float, np.ndarray]:
     if not labelled:
         return best, center
     side = LABEL_SHARE * best
-    gap = 0.1 * side
-    options = []
-    for direction in ((0.0, -1.0), (0.0, 1.0), (-1.0, 0.0), (1.0, 0.0)):
-        c = _slide(region, center, side, np.array(direction))
-        rest = region.difference(shapely.box(*(c - side / 2 - gap), *(c + side / 2 + gap)))
-        if rest.geom_type != "Polygon":
-            rest = max(getattr(rest, "geoms", []), key=lambda g: g.area, default=None)
-        room = 0.0 if rest is None or rest.is_empty else rest.exterior.distance(polylabel(rest, 1e-3 * side))
-        options.append((room, c))
-    room, c = max(options, key=lambda o: o[0])  # the first of equals: below the label, else above, left, right
-    return side, c
+    _, c = _beside_label(region, center, side)
+    x0, y0, x1, y1 = region.bounds
+    lo, hi = side, max(x1 - x0, y1 - y0)
+    need = LABEL_ROOM * inradius
+    for _ in range(16):  # the room left for the label shrinks as the marker grows
+        mid = 0.5 * (lo + hi)
+        placed = _beside_label(region, center, mid)
+        if placed is not None and placed[0] >= need:
+            lo, c = mid, placed[1]
+        else:
+            hi = mid
+    return lo, c
 
 
 def marker_layout(design: Design) -> MarkerLayout:
@@ -220,7 +257,7 @@ def _layout_cached(design: Design) -> MarkerLayout:
                 corner = flat[at].mean(axis=0)
                 zone = Polygon(corner + MARK_REACH * (flat - corner))
                 region = region.difference(zone)
-        side, c = _place(region, poly.names[k] in labelled or any(m.face == poly.names[k] for m in marks))
+        side, c = _place(region, poly.names[k] in labelled or any(m.face == poly.names[k] for m in marks), inradius)
         if side < MIN_SIDE_FRACTION * size:
             continue
         h = side / 2

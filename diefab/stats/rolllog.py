@@ -49,15 +49,17 @@ from pathlib import Path
 import numpy as np
 
 from diefab.core.errors import StatsError
-from diefab.core.files import atomic_write
+from diefab.core.files import atomic_write, output_path
 
 __all__ = [
     "HEADER",
+    "LOG_SUFFIX",
     "MAX_LOG_BYTES",
     "Roll",
     "RollLog",
     "append_roll",
     "is_roll_log",
+    "log_path",
     "parse_value",
     "read_log",
     "remove_last_roll",
@@ -68,6 +70,23 @@ __all__ = [
 HEADER = ("time", "value", "face", "confidence", "frame")
 #: Largest roll log read (about 2 million rolls).
 MAX_LOG_BYTES = 100 << 20
+#: A roll log's file name after its name: ``OUT/NAME-rolls.csv``, whether ``read`` or ``roll`` writes it.
+LOG_SUFFIX = "-rolls.csv"
+#: The suffix hand tallies were once saved with; such a log, alone in its folder, is still read and resumed.
+_OLD_SUFFIX = ".rolls.csv"
+
+
+def log_path(folder: str | Path, name: str) -> Path:
+    """The roll log of `name` in `folder`: ``NAME-rolls.csv``, or an existing ``NAME.rolls.csv`` when only it exists.
+
+    Examples
+    --------
+    >>> log_path("rolls", "d6").as_posix()
+    'rolls/d6-rolls.csv'
+    """
+    path = output_path(folder, name, LOG_SUFFIX)
+    old = output_path(folder, name, _OLD_SUFFIX)
+    return old if old.is_file() and not path.exists() else path
 
 
 @dataclass(frozen=True)

@@ -113,6 +113,13 @@ class Tally:
         """The key that records `value`."""
         return self.keys[self._index[int(value)]]
 
+    def add(self, value: int) -> None:
+        """Record a roll of `value` (a camera's reading, say) without a key."""
+        if int(value) not in self._index:
+            raise StatsError(f"roll {value} is not a value of the die ({', '.join(map(str, self.values))})")
+        self.test.push(self._index[int(value)])
+        self._result = None
+
     def press(self, key: str) -> Event:
         """Apply one key; returns what it did."""
         if key in self._by_key:

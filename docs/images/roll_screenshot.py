@@ -27,9 +27,9 @@ async def main() -> None:
     design = load_design("fudge-gem-paper")
     goal = design.target_distribution.aligned(design.support)
     rolls = np.random.default_rng(0).choice(design.support, size=300, p=TABLE_2 / TABLE_2.sum())
-    os.chdir(tempfile.mkdtemp())  # the log's path shows as the user's would: rolls/NAME.rolls.csv
+    os.chdir(tempfile.mkdtemp())  # the log's path shows as the user's would: rolls/NAME-rolls.csv
     Path("rolls").mkdir()
-    log = Path("rolls/fudge-gem-paper.rolls.csv")
+    log = Path("rolls/fudge-gem-paper-rolls.csv")
     repair_log(log)
     tally = Tally(design.support, goal, 0.05)
     app = roll_app(tally, log, "fudge-gem-paper against 4dF", "4dF")
