@@ -17,7 +17,8 @@ import time
 
 from diefab.dice.design import load_design
 from diefab.fabricate.engrave import cut_labels, cutter
-from diefab.fabricate.stl import _hull, build_solid
+from diefab.fabricate.rounding import hull_body
+from diefab.fabricate.stl import build_solid
 
 
 def _median_time(fn, repeat: int) -> float:
@@ -45,7 +46,7 @@ def main() -> None:
 
     def engrave(batched: bool):
         # the cutters are rebuilt each time: manifold3d evaluates lazily and caches results
-        body = _hull(design.polyhedron.vertices * scale)
+        body = hull_body(design.polyhedron.vertices * scale)
         cutters = [cutter(label, depth, False) for label in solid.labels]
         out = cut_labels(body, cutters, batched=batched)
         out.num_tri()  # force evaluation

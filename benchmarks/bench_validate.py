@@ -50,10 +50,10 @@ def plain_outcomes(design, settings, seed: int, n: int, workers: int) -> np.ndar
 
 
 def worker_rss_mb() -> list[float]:
-    from diefab.physics import simulate as physics
+    from diefab.physics import pool
 
     out = []
-    for proc in getattr(physics._POOL, "_processes", {}).values():
+    for proc in getattr(pool._POOL, "_processes", {}).values():
         with open(f"/proc/{proc.pid}/status", encoding="ascii") as fh:
             out += [int(line.split()[1]) / 1024 for line in fh if line.startswith("VmRSS:")]
     return out

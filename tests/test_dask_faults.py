@@ -21,7 +21,7 @@ pytest.importorskip("distributed")
 pytestmark = [pytest.mark.slow, pytest.mark.skipif(shutil.which("dask") is None, reason="no dask command")]
 
 ROOT = Path(__file__).parent.parent
-#: Longest a failed run may take to say so: diefab.physics.simulate.DASK_STALL and a margin for a loaded machine.
+#: Longest a failed run may take to say so: diefab.physics.cluster.DASK_STALL and a margin for a loaded machine.
 LIMIT = 120
 
 

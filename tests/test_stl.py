@@ -220,9 +220,9 @@ def test_batched_and_sequential_engraving_agree(gem_solid):
     import manifold3d
 
     from diefab.fabricate.engrave import cutter
-    from diefab.fabricate.stl import _hull
+    from diefab.fabricate.rounding import hull_body
 
-    body = _hull(gem_solid.design.polyhedron.vertices * 15.0)
+    body = hull_body(gem_solid.design.polyhedron.vertices * 15.0)
     cutters = [cutter(label, 0.6, False) for label in gem_solid.labels]
     one = cut_labels(body, cutters, batched=True)
     many = cut_labels(body, cutters, batched=False)

@@ -5,6 +5,7 @@ design's convex hull (optionally with rounded edges and corners), cuts (or
 raises) every label with one batched boolean, checks the result after each
 operation, verifies it with trimesh, and measures what the engraving and the
 print's infill do to the centre of mass and to the landing prediction.
+:mod:`.rounding` rounds the edges and predicts where a rounded die lands,
 :mod:`.engrave` places and cuts the labels, :mod:`.formats` writes the body
 as STL or 3MF.
 
@@ -27,14 +28,6 @@ Placement rules
   A face nearly perpendicular to the axis (projection shorter than
   ``AXIS_PROJECTION``, e.g. the gem's top) stands its text on its longest
   edge, reading along it.
-
-Landing model of a rounded die
-------------------------------
-A rounded die can only rest on the flat parts of its faces; a die that lands
-on a rounded edge rolls off onto one of them.  The rounded die's prediction is
-the solid angle that each *flat* face polygon subtends at the centre of mass,
-normalised by their sum (the rounded zones' share is spread in proportion).
-Without rounding this is exactly the paper's solid-angle model.
 
 Examples
 --------
@@ -59,10 +52,17 @@ from diefab.core.errors import FabricationError
 from diefab.dice.design import Design
 from diefab.dice.notes import small_die_warning
 from diefab.fabricate.engrave import checked, cut_labels, cutter
-from diefab.geometry.polyhedron import Polyhedron
+from diefab.fabricate.rounding import (
+    flat_face_probabilities,
+    flat_faces,
+    hull_body,
+    mesh_moments,
+    rotation_to_down,
+    rounded_body,
+)
 from diefab.made.bodies import MAX_DEPTH_FRACTION, label_mass, thinnest_width
 from diefab.made.fill import Fill
-from diefab.made.mass import bed_face, inset, mass_properties
+from diefab.made.mass import bed_face, mass_properties
 from diefab.made.placement import Label, Labelling, label_faces, stroke_warnings
 from diefab.made.text import Font, load_font
 
@@ -78,8 +78,6 @@ __all__ = [
 
 #: Smallest edge rounding, mm (a printer resolves about 0.05 mm).
 MIN_ROUND_MM = 0.01
-#: Segments of the spheres that round edges and corners.
-ROUND_SEGMENTS = 32
 
 
 @dataclass(frozen=True, eq=False)
@@ -156,109 +154,6 @@ class Solid:
         import trimesh
 
         return trimesh.Trimesh(self.vertices, self.triangles, process=True)
-
-
-# ----------------------------------------------------------------------
-# small pure helpers
-
-
-def mesh_moments(vertices: np.ndarray, triangles: np.ndarray) -> tuple[float, np.ndarray]:
-    """Volume and first moment ∫ x dV of a closed, outward-oriented triangle mesh.
-
-    Returns
-    -------
-    volume : float
-    first : (3,) float
-        Divide by the volume for the centre of mass.
-    """
-    v = np.asarray(vertices, dtype=float)[np.asarray(triangles)]
-    det = np.einsum("ij,ij->i", v[:, 0], np.cross(v[:, 1], v[:, 2]))
-    return float(det.sum() / 6), (det[:, None] * v.sum(axis=1)).sum(axis=0) / 24
-
-
-def _polygon_solid_angle(points: np.ndarray, center: np.ndarray) -> float:
-    """Solid angle of a planar convex polygon (ordered ring, (k, 3)) seen from `center`."""
-    r = points - center
-    a = np.repeat(r[:1], len(r) - 2, axis=0)
-    b, c = r[1:-1], r[2:]
-    la, lb, lc = (np.linalg.norm(x, axis=1) for x in (a, b, c))
-    triple = np.einsum("ij,ij->i", a, np.cross(b, c))
-    denom = la * lb * lc + (a * b).sum(1) * lc + (a * c).sum(1) * lb + (b * c).sum(1) * la
-    return float(abs((2 * np.arctan2(triple, denom)).sum()))
-
-
-def flat_face_probabilities(flat_faces: list[np.ndarray | None], center: np.ndarray) -> np.ndarray:
-    """(m,) float: solid angle of each flat face polygon at `center`, normalised to sum 1.
-
-    `flat_faces` holds an ordered (k, 3) ring per face, or None where rounding
-    left no flat part (probability 0).
-    """
-    omega = np.array([0.0 if f is None else _polygon_solid_angle(f, center) for f in flat_faces])
-    return omega / omega.sum()
-
-
-def _rotation_to_down(normal: np.ndarray) -> np.ndarray:
-    """(3, 3): the rotation taking unit vector `normal` to (0, 0, -1) (Rodrigues)."""
-    target = np.array([0.0, 0.0, -1.0])
-    axis = np.cross(normal, target)
-    s, c = np.linalg.norm(axis), float(normal @ target)
-    if s < 1e-12:
-        return np.eye(3) if c > 0 else np.diag([1.0, -1.0, -1.0])
-    k = axis / s
-    kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    return np.eye(3) + s * kx + (1 - c) * kx @ kx
-
-
-# ----------------------------------------------------------------------
-# building
-
-
-def _hull(points_mm: np.ndarray):
-    import manifold3d
-
-    return checked(manifold3d.Manifold.hull_points(np.ascontiguousarray(points_mm, dtype=float)), "building the hull")
-
-
-def _rounded(poly: Polyhedron, scale: float, inset_mm: float, radius_mm: float, clip):
-    """The polyhedron shrunk by `inset_mm`, grown back by spheres of `radius_mm`, clipped by `clip`."""
-    import manifold3d
-
-    core = inset(poly, inset_mm / scale) if inset_mm > 0 else poly
-    if core is None:
-        return None
-    if radius_mm <= 0:
-        return _hull(core.vertices * scale)
-    # the sphere's polygon must cover the true sphere, so the flat faces land on the original planes
-    cover = radius_mm / math.cos(math.pi / ROUND_SEGMENTS) ** 2
-    sphere = manifold3d.Manifold.sphere(cover, ROUND_SEGMENTS).to_mesh64()
-    sphere_pts = np.asarray(sphere.vert_properties)[:, :3]
-    points = (core.vertices * scale)[:, None, :] + sphere_pts[None, :, :]
-    body = _hull(points.reshape(-1, 3))
-    return checked(body ^ clip, "clipping the rounded body to the face planes")
-
-
-def _flat_faces(poly: Polyhedron, scale: float, round_mm: float) -> list[np.ndarray | None]:
-    """The flat part of each face after rounding by `round_mm` (mm, ordered rings), None where none is left.
-
-    Rounding is the die shrunk by the radius and grown back by a ball, so the
-    flat part of face k is face k of the shrunk die moved out by the radius
-    along its normal: exact, whatever the face's orientation.
-    """
-    rings = [poly.vertices[f] * scale for f in poly.faces]
-    if round_mm <= 0:
-        return rings
-    core = inset(poly, round_mm / scale)
-    if core is None:
-        return [None] * len(poly.faces)
-    out: list[np.ndarray | None] = []
-    for k in range(len(poly.faces)):
-        cos = core.normals @ poly.normals[k]
-        j = int(np.argmax(cos))
-        if cos[j] < 1 - tol.COPLANAR or core.areas[j] * scale**2 <= tol.AREA * scale**2:
-            out.append(None)
-            continue
-        out.append(core.vertices[core.faces[j]] * scale + round_mm * poly.normals[k])
-    return out
 
 
 def build_solid(
@@ -382,11 +277,11 @@ def build_solid(
     bed_name = poly.names[bed_index]
     warnings = [w for w in (small_die_warning(design),) if w]
 
-    sharp = _hull(poly.vertices * scale)
-    body = sharp if round_mm == 0 else _rounded(poly, scale, round_mm, round_mm, sharp)
+    sharp = hull_body(poly.vertices * scale)
+    body = sharp if round_mm == 0 else rounded_body(poly, scale, round_mm, round_mm, sharp)
     if body is None:
         raise FabricationError(f"round={round_mm:g} mm is too large: the die is {width:.2f} mm thick at its thinnest")
-    flat = _flat_faces(poly, scale, round_mm)
+    flat = flat_faces(poly, scale, round_mm)
     warnings += [
         f"face {poly.names[k]} has no flat part left after rounding: the die cannot rest on it"
         for k, ring in enumerate(flat)
@@ -511,7 +406,7 @@ def build_solid(
     report["engraved"] = list(dict.fromkeys(label.face for label, up in zip(labels, raised) if not up))
     return Solid(
         design, mesh.vertices, mesh.triangles, mesh.label_triangles, tuple(labels), report, tuple(warnings),
-        _rotation_to_down(poly.normals[bed_index]), _mesh_arrays(base), inlay, inlays,
+        rotation_to_down(poly.normals[bed_index]), _mesh_arrays(base), inlay, inlays,
     )  # fmt: skip
 
 
@@ -603,7 +498,7 @@ def _printed(design, print_fill, labels, raised, depth_mm, bed_index, round_mm, 
         return printed.mass * scale**3, printed.center * scale, True
     core_inset = max(round_mm, print_fill.wall_thickness_mm)
     core_radius = max(0.0, round_mm - print_fill.wall_thickness_mm)
-    core = _rounded(poly, scale, core_inset, core_radius, sharp)
+    core = rounded_body(poly, scale, core_inset, core_radius, sharp)
     if core is None:  # walls meet: the print is solid
         core_volume, core_first = 0.0, np.zeros(3)
     else:

@@ -22,14 +22,10 @@ The settings of a drop are :class:`~diefab.dice.drop.PhysicsSettings`
 from __future__ import annotations
 
 import contextlib
-import logging
 import os
-import signal
-import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -37,6 +33,8 @@ from diefab.core.errors import DesignError, PhysicsError
 from diefab.dice.design import Design
 from diefab.dice.drop import PhysicsSettings
 from diefab.made.fill import Fill
+from diefab.physics.cluster import dask_client, gather
+from diefab.physics.pool import SIGNAL_POLL, shutdown_pool, worker_pool
 
 __all__ = [
     "MAX_DROPS",
@@ -221,247 +219,11 @@ def drop(
 # ----------------------------------------------------------------------
 # the parallel run
 
-_POOL: Any = None
-_POOL_SIZE = 0
-_ATEXIT: list[bool] = []
-
-
-def _pool(workers: int):
-    """A reused pool of `workers` processes, each keeping one pybullet world."""
-    global _POOL, _POOL_SIZE
-    if _POOL is None or _POOL_SIZE != workers:
-        shutdown_pool()
-        import multiprocessing
-        from concurrent.futures import ProcessPoolExecutor
-
-        # fork starts a worker in milliseconds and needs no `if __name__ == "__main__"` guard in the
-        # caller's script; the parent never holds a pybullet world the children would touch
-        method = "fork" if sys.platform == "linux" else "spawn"
-        # Start the workers now, with the stop signals held back: an interrupt raised inside a fork
-        # hook (logging's lock release) is swallowed by Python, and the run would go on.
-        with _signals_held():
-            _POOL = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method),
-                                        initializer=_worker_start, initargs=(os.getpid(),))  # fmt: skip
-            _POOL_SIZE = workers
-            _POOL.submit(int).result()
-        if not _ATEXIT:
-            import atexit
-
-            atexit.register(shutdown_pool)  # before the interpreter tears down what the pool needs
-            _ATEXIT.append(True)
-    return _POOL
-
-
-#: Seconds the parent waits on its workers at a time before it looks for a stop signal.
-SIGNAL_POLL = 0.25
-_STOP_SIGNALS = {getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)}
-
-
-@contextlib.contextmanager
-def _signals_held():
-    """Hold back Ctrl-C, SIGTERM and SIGHUP in this thread (delivered when the block ends)."""
-    import threading
-
-    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
-
-
-def _worker_start(parent: int) -> None:
-    """Worker initializer: the parent's signal handling, and death with the parent.
-
-    A worker whose parent is killed (SIGKILL, SIGHUP, a crash) must not live
-    on, reparented, holding a core: on Linux the kernel sends it SIGKILL when
-    the parent dies (``prctl(PR_SET_PDEATHSIG)``); elsewhere a daemon thread
-    polls the parent's pid.
-    """
-    from diefab.physics.world import worker_signals
-
-    worker_signals()  # before the signals held back while the parent forked arrive, not after
-    if hasattr(signal, "pthread_sigmask"):
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, _STOP_SIGNALS)
-    if not _die_with_parent() or os.getppid() != parent:  # no prctl, or the parent is already gone
-        import threading
-
-        threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
-
-
-def _die_with_parent() -> bool:
-    """Ask Linux to SIGKILL this process when its parent dies; False where that is not possible."""
-    if not sys.platform.startswith("linux"):
-        return False
-    import ctypes
-
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        return libc.prctl(1, signal.SIGKILL, 0, 0, 0) == 0  # 1 = PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        return False
-
-
-def _watch_parent(parent: int, interval: float = 0.5) -> None:
-    while os.getppid() == parent:
-        time.sleep(interval)
-    os._exit(1)
-
-
-def shutdown_pool(kill: bool = False) -> None:
-    """Stop the worker processes kept between calls of :func:`simulate`."""
-    global _POOL, _POOL_SIZE
-    if _POOL is not None:
-        if kill:  # the pool then fails its pending futures itself (cancelling them first races with that)
-            for proc in list((getattr(_POOL, "_processes", None) or {}).values()):
-                proc.terminate()
-            _POOL.shutdown(wait=True)
-        else:
-            _POOL.shutdown(wait=True, cancel_futures=True)
-        _POOL, _POOL_SIZE = None, 0
-
 
 def _batches(n: int, workers: int) -> list[tuple[int, int]]:
     # small enough to balance the workers and move the progress bar, big enough to keep them busy
     size = int(np.clip(n // (workers * 16), 32, 512))
     return [(start, min(start + size, n)) for start in range(0, n, size)]
-
-
-def dask_client(scheduler, timeout: float = 3.0):
-    """``(client, owned)``: a Dask client for `scheduler` (an address or a ``distributed.Client``).
-
-    ``owned`` is True when the client was opened here (the caller closes it).
-    An address where no Dask scheduler answers fails within about `timeout`
-    seconds (twice that at worst) with a :class:`PhysicsError`: nothing
-    listening, a server that stays silent, or one that sends something else.
-    """
-    from diefab.core.extras import require
-
-    Client = require("distributed", "dask", "--scheduler").Client
-    # a lost cluster is reported by the caller as one PhysicsError, not by the client's own log lines
-    for name in ("distributed", "distributed.client", "distributed.core", "distributed.comm"):
-        logging.getLogger(name).setLevel(logging.CRITICAL)
-    if isinstance(scheduler, Client):
-        return scheduler, False
-    if not isinstance(scheduler, str) or not scheduler.strip():
-        raise PhysicsError(f"scheduler address {scheduler!r} is not an address such as tcp://host:8786")
-    _probe_scheduler(scheduler, timeout)
-    try:
-        return Client(scheduler, timeout=f"{timeout}s"), True
-    except (OSError, TimeoutError, ValueError, TypeError, MemoryError) as exc:
-        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise PhysicsError(f"cannot reach Dask scheduler {scheduler!r}: {reason}") from None
-
-
-#: Largest first message a Dask scheduler sends (its handshake is a few hundred bytes).
-_HANDSHAKE_MAX = 1 << 20
-
-
-def _probe_scheduler(address: str, timeout: float) -> None:
-    """Check within `timeout` that a plain TCP `address` greets like a Dask scheduler.
-
-    Dask's TCP comm starts with both ends sending a handshake: an 8-byte
-    length, then that many bytes.  distributed waits for it without a time
-    limit and allocates whatever length arrives, so a silent server (an HTTP
-    server waits for a request) hangs the client and a chatty one makes it
-    allocate exabytes.  Other schemes (tls://, ucx://, ...) are left to
-    distributed's own timeout.
-    """
-    import socket
-    import struct
-
-    from distributed.comm import parse_address, parse_host_port
-
-    try:
-        scheme, location = parse_address(address)
-        if scheme != "tcp":
-            return
-        host, port = parse_host_port(location, default_port=8786)
-    except (ValueError, TypeError) as exc:
-        raise PhysicsError(f"scheduler address {address!r} is not valid: {exc}") from None
-
-    def fail(reason: str) -> None:
-        raise PhysicsError(f"cannot reach Dask scheduler {address!r}: {reason}")
-
-    deadline = time.monotonic() + timeout
-    try:
-        with socket.create_connection((host, port), timeout=timeout) as sock:
-
-            def receive(size: int) -> bytes:
-                data = b""
-                while len(data) < size:
-                    left = deadline - time.monotonic()
-                    if left <= 0:
-                        raise TimeoutError
-                    sock.settimeout(left)
-                    chunk = sock.recv(min(size - len(data), 65536))
-                    if not chunk:
-                        fail("the server closed the connection without a Dask handshake")
-                    data += chunk
-                return data
-
-            try:
-                (size,) = struct.unpack("Q", receive(8))
-                if not 0 < size <= _HANDSHAKE_MAX:
-                    fail("the server is not a Dask scheduler (it does not speak Dask's protocol)")
-                receive(size)
-            except TimeoutError:
-                fail(f"no Dask handshake within {timeout:g} s (is it a Dask scheduler?)")
-    except OSError as exc:
-        fail(f"{exc.strerror or exc}")
-
-
-#: Seconds a Dask run may go without a worker or without its scheduler before it fails.
-DASK_STALL = 30.0
-
-
-def _gather_dask(client, futures, on_result, check_stop) -> None:
-    """Hand each finished future to `on_result`; fail in one line if the cluster cannot finish.
-
-    A run whose scheduler is gone, or whose cluster has had no worker for
-    :data:`DASK_STALL` seconds, raises :class:`PhysicsError` instead of
-    waiting forever (Dask itself would wait for a worker to come back).
-    """
-    from distributed import wait
-
-    pending = set(futures)
-    lonely = None  # since when the cluster has had no worker
-    while pending:
-        try:
-            ready, _ = wait(list(pending), timeout=SIGNAL_POLL, return_when="FIRST_COMPLETED")
-            ready = set(ready) & pending
-        except TimeoutError:
-            ready = set()
-        except Exception as exc:  # the scheduler went away: distributed raises many kinds
-            raise PhysicsError(f"the Dask scheduler was lost ({type(exc).__name__})") from None
-        for future in ready:
-            pending.discard(future)
-            if future.status != "finished":
-                raise PhysicsError(f"a Dask batch failed or the scheduler was lost ({future.status}); the drops "
-                                   "that had finished are not counted")  # fmt: skip
-            try:
-                on_result(future)
-            except (OSError, TimeoutError) as exc:
-                raise PhysicsError(f"the Dask scheduler was lost ({type(exc).__name__})") from None
-        check_stop()
-        if ready:
-            lonely = None
-            continue
-        if client.status not in ("running", "connecting"):
-            raise PhysicsError(f"the Dask scheduler was lost (client {client.status})")
-        try:
-            workers = len(client.nthreads())
-        except Exception as exc:
-            raise PhysicsError(f"the Dask scheduler was lost ({type(exc).__name__})") from None
-        if workers:
-            lonely = None
-        elif lonely is None:
-            lonely = time.monotonic()
-        elif time.monotonic() - lonely > DASK_STALL:
-            raise PhysicsError(f"the Dask cluster has had no worker for {DASK_STALL:g} s; start workers and run "
-                               "again")  # fmt: skip
 
 
 def _check_run(design: Design, n, seed, workers, settings: PhysicsSettings) -> int:
@@ -554,7 +316,7 @@ def simulate(
                                      [a for a, _ in batches], [b for _, b in batches], pure=False)  # fmt: skip
                 where = {f.key: batch for f, batch in zip(futures, batches)}
                 try:
-                    _gather_dask(client, futures, lambda f: finished(*where[f.key], f.result()), check_stop)
+                    gather(client, futures, lambda f: finished(*where[f.key], f.result()), check_stop)
                 except BaseException:
                     with contextlib.suppress(Exception):
                         client.cancel(futures)
@@ -570,7 +332,7 @@ def simulate(
         else:
             from concurrent.futures import FIRST_COMPLETED, wait
 
-            pool = _pool(workers)
+            pool = worker_pool(workers)
             pending = {pool.submit(run_batch, body, settings, seed, a, b): (a, b) for a, b in batches}
             while pending:
                 # a timeout brings the main thread back to Python now and then, to run a signal handler
