@@ -287,12 +287,19 @@ def _rotation_spread(objects, rotation, translation, camera, error: float) -> tu
     Corner scatter through the solve's Jacobian: the corners scatter by the RMS reprojection error (at
     least :data:`CORNER_PX`); an uncalibrated lens adds :data:`LENS_DEG` to the standard error.  The
     covariance is that of the rotation's Rodrigues vector, lens not included.
+
+    With several markers the residual keeps many degrees of freedom and its RMS is close to the scatter
+    (the ramps of :func:`read_pose` are set on it).  One marker's four corners give eight coordinates to
+    six pose parameters: the pose absorbs most of the scatter (a small marker seen square-on tilts freely)
+    and the RMS residual is on average half of it, so it is doubled (``sqrt(8 / (8 - 6))``).
     """
     import cv2
 
     rvec = cv2.Rodrigues(rotation)[0]
     _, jacobian = cv2.projectPoints(objects, rvec, translation.reshape(3, 1), camera.matrix, camera.distortion)
     j = jacobian[:, :6]
+    if len(objects) == 4:
+        error *= math.sqrt(8 / (8 - 6))
     sigma = max(error, CORNER_PX)
     try:
         cov = sigma**2 * np.linalg.inv(j.T @ j)

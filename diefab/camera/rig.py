@@ -71,9 +71,9 @@ def _finger(rng: np.random.Generator, centre: np.ndarray, radius: float, reach=(
 
 
 def rendered_rests(
-    design: Design, layout: MarkerLayout, n: int, seed: int, *, finger: float = 0.15
+    design: Design, layout: MarkerLayout, n: int, seed: int, *, finger: float = 0.15, start: int = 0
 ) -> Iterator[RenderedRest]:
-    """`n` rendered rests; each draws its own view and conditions from ``(seed, i)``.
+    """Rendered rests `start` to `n` - 1; rest `i` draws its own view and conditions from ``(seed, i)``.
 
     A share `finger` of them has a finger from outside the die reaching to 0.6-1 of its image radius
     from its centre (``occluded``); no other finger is drawn.
@@ -81,7 +81,7 @@ def rendered_rests(
     poly = design.polyhedron
     resting = [k for k, name in enumerate(poly.names) if name in design.values]
     textures: dict = {}
-    for i in range(n):
+    for i in range(start, n):
         rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(i,)))
         view = random_view(rng, design)
         face = int(rng.choice(resting))
