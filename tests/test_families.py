@@ -23,6 +23,7 @@ EXAMPLES = {
     "trapezohedron": {"n": 5, "t": 0.7, "u": 0.9},
     "cuboid": {"x": 1.5, "z": 0.8, "t": 0.2},
     "freeform": {"n": 12, "h3": 1.2, "h7": 0.8},
+    "icosahedral": {"d": 1.02},
 }
 
 
