@@ -225,3 +225,22 @@ def test_upload_checks(tmp_path):
     outside = b'name = "m"\nfamily = "mesh"\nmesh = "/etc/passwd"\nvalues = {}\n'
     with pytest.raises(DesignError):
         parse_upload(outside, "m.toml", tmp_path)
+
+
+def test_make_tab_writes_the_net_and_the_solid_with_markers(tmp_path):
+    """The Make tab's writers with markers: every id read back from the net, the solid's pockets measured."""
+    cv2 = pytest.importorskip("cv2")
+    from diefab.camera.pose import MarkerDetector
+    from diefab.dice.markers import marker_layout
+    from diefab.studio.make import write_net, write_solid
+
+    design = load_design("d6")
+    (png,) = write_net(design, tmp_path, formats=("png",), markers=True)
+    gray = cv2.imdecode(np.fromfile(png, np.uint8), cv2.IMREAD_GRAYSCALE)
+    layout = marker_layout(design)
+    ids, _ = MarkerDetector(layout).detect(gray)
+    assert sorted(ids.tolist()) == layout.ids.tolist()
+    _, plain = write_solid(design, tmp_path / "plain")
+    _, marked = write_solid(design, tmp_path / "marked", markers=True)
+    assert marked["watertight"] and len(marked["markers"]) == len(design.polyhedron.faces)
+    assert marked["marker_volume_mm3"] > 0 and not plain.get("marker_volume_mm3")

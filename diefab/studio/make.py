@@ -19,15 +19,21 @@ def _inside(out_dir: Path, path: Path) -> Path:
 
 def write_net(design: Design, out_dir: Path, *, page: str = "A4", formats: tuple[str, ...] = ("svg", "pdf"),
               copies: int = 1, mark: str = "bar", pips: bool = False, face_names: bool = False,
-              tab_width: float = 5.0) -> list[Path]:  # fmt: skip
-    """Write the paper net of `design` (as ``diefab net``); the files written."""
+              tab_width: float = 5.0, markers: bool = False) -> list[Path]:  # fmt: skip
+    """Write the paper net of `design` (as ``diefab net``, with ``--markers`` if `markers`); the files written."""
     from diefab.core.files import ensure_dir, output_path, write_files
     from diefab.fabricate.net import design_net, render_net
     from diefab.made.pages import parse_page
 
     ensure_dir(out_dir)
     net = design_net(design, page=parse_page(page), tab_width=tab_width)
-    rendered = render_net(design, net, formats, face_names=face_names, copies=copies, mark=mark, pips=pips)
+    placed = []
+    if markers:
+        from diefab.fabricate.markers import net_markers
+
+        placed = net_markers(design, net)
+    rendered = render_net(design, net, formats, face_names=face_names, copies=copies, mark=mark, pips=pips,
+                          markers=placed)  # fmt: skip
     paths = {k: _inside(out_dir, output_path(out_dir, design.name, f"-net.{k}")) for k in formats}
     return write_files({paths[k]: rendered[k] for k in formats})
 
@@ -41,8 +47,12 @@ def write_solid(
     depth_mm: float = 0.6,
     emboss: bool = False,
     inlay: bool = False,
+    markers: bool = False,
 ) -> tuple[list[Path], dict]:
-    """Write the printable solid of `design` (as ``diefab stl``); the files written and the solid's report."""
+    """Write the printable solid of `design` (as ``diefab stl``); the files written and the solid's report.
+
+    `markers` inlays each face's ArUco marker, as ``diefab stl --markers``.
+    """
     from diefab.core.files import ensure_dir, output_path, write_files
     from diefab.fabricate.formats import inlay_stl_bytes, stl_bytes, threemf_bytes
     from diefab.fabricate.stl import build_solid
@@ -52,7 +62,7 @@ def write_solid(
         raise FabricationError(f"formats {','.join(formats)!r}: the solid's formats are stl and 3mf")
     ensure_dir(out_dir)
     fill = design.fill if design.fill.kind == "print" else None
-    solid = build_solid(design, round_mm=round_mm, depth_mm=depth_mm, emboss=emboss,
+    solid = build_solid(design, round_mm=round_mm, depth_mm=depth_mm, emboss=emboss, markers=markers,
                         **({"print_fill": fill} if fill is not None else {}))  # fmt: skip
     payloads = {}
     for k in formats:

@@ -55,6 +55,7 @@ class MakePanel:
                 self.copies = ui.number("copies", value=1, min=1, max=100, step=1, precision=0).classes("w-40")
                 self.mark = ui.select(["bar", "period", "none"], value="bar", label="6/9 mark").classes("w-40")
                 self.net_format = ui.select(["svg", "pdf"], value="svg", label="format").classes("w-40")
+                self.net_markers = ui.checkbox("ArUco markers (for diefab read)")
                 ui.button("download net", on_click=self.download_net).classes("studio-download-net")
                 ui.separator()
                 ui.label("Printable solid").classes("font-bold")
@@ -62,6 +63,7 @@ class MakePanel:
                 self.depth_mm = ui.number("label depth, mm", value=0.6, min=0.2, max=2, step=0.1).classes("w-40")
                 self.emboss = ui.checkbox("emboss (raise) the labels")
                 self.inlay = ui.checkbox("also the inlay (labels alone)")
+                self.solid_markers = ui.checkbox("ArUco markers, inlaid (for diefab read)")
                 self.solid_format = ui.select(["stl", "3mf"], value="stl", label="format").classes("w-40")
                 ui.button("download solid", on_click=self.download_solid).classes("studio-download-stl")
                 self.note = ui.label().classes("studio-make-note text-sm")
@@ -104,12 +106,14 @@ class MakePanel:
 
     async def download_net(self) -> None:
         await self._make("net", write_net, page=self.page_size.value, formats=(self.net_format.value,),
-                         copies=int(self.copies.value or 1), mark=self.mark.value)  # fmt: skip
+                         copies=int(self.copies.value or 1), mark=self.mark.value,
+                         markers=bool(self.net_markers.value))  # fmt: skip
 
     async def download_solid(self) -> None:
         await self._make("solid", write_solid, formats=(self.solid_format.value,),
                          round_mm=float(self.round_mm.value or 0), depth_mm=float(self.depth_mm.value or 0.6),
-                         emboss=bool(self.emboss.value), inlay=bool(self.inlay.value))  # fmt: skip
+                         emboss=bool(self.emboss.value), inlay=bool(self.inlay.value),
+                         markers=bool(self.solid_markers.value))  # fmt: skip
 
     async def _make(self, what: str, writer, **options) -> None:
         """Run a writer of :mod:`diefab.studio.make` in a thread and download what it wrote."""
