@@ -1,14 +1,8 @@
 """Anytime-valid tests of a die against a target: may be checked after every roll.
 
-A fixed-N p-value is only valid if the number of rolls was fixed in advance;
-looking at it after every roll and stopping when it looks good inflates the
-error rate without bound.  This module builds a *confidence sequence* for the
-die's true distribution ``p`` over the target's k values, valid at every
-number of rolls at once, and reads two verdicts off it:
-
-- **within** δ: every distribution in the confidence set lies within total
-  variation distance δ of the target (strictly);
-- **off** by at least δ: every distribution in the set lies at TVD >= δ.
+:func:`sequential_test` reads two verdicts off a confidence sequence for
+the die's distribution, valid at every number of rolls at once: **within**
+δ of the target in total variation distance, or **off** by at least δ.
 
 The confidence sequence itself (its method and exact TVD bounds) is in
 :mod:`diefab.stats.confidence_sequence`; the estimate of rolls still
