@@ -14,7 +14,6 @@ STL previews as PNG under --figures.
 from __future__ import annotations
 
 import argparse
-import io
 import re
 import shutil
 import subprocess
@@ -22,7 +21,6 @@ import sys
 import tempfile
 import time
 import xml.etree.ElementTree as ET
-import zipfile
 from dataclasses import replace
 from pathlib import Path
 
@@ -32,7 +30,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from diefab import Design, load_design  # noqa: E402
 from diefab.dice.design import design_axis  # noqa: E402
-from diefab.fabricate.formats import threemf_bytes  # noqa: E402
+from diefab.fabricate.formats import threemf_bytes, threemf_mesh  # noqa: E402
 from diefab.fabricate.net import design_net, footer_texts, render_net  # noqa: E402
 from diefab.fabricate.sheet import layout_sheets, plan_footer  # noqa: E402
 from diefab.fabricate.stl import build_solid, mesh_moments  # noqa: E402
@@ -138,14 +136,7 @@ def solids() -> None:
     print(f"  d6 with a blank face: bed {s.report['bed_face']}, engraved {s.report['engraved']}")
     print("\n3MF: body and labels as two coloured parts of one object (fudge-gem, 30 mm)")
     s = build_solid(load_design("fudge-gem"))
-    package = zipfile.ZipFile(io.BytesIO(threemf_bytes(s)))
-    root = ET.fromstring(package.read("3D/3dmodel.model"))
-    ns = {"m": "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"}
-    (obj,) = root.iterfind(".//m:object", ns)
-    v = np.array([[float(x.get(k)) for k in "xyz"] for x in obj.iterfind(".//m:vertex", ns)])
-    triangles = list(obj.iterfind(".//m:triangle", ns))
-    t = np.array([[int(x.get(k)) for k in ("v1", "v2", "v3")] for x in triangles])
-    part = np.array([int(x.get("p1")) for x in triangles])
+    v, t, part = threemf_mesh(threemf_bytes(s))
     for k, name in enumerate(("body", "labels")):
         print(f"  {name:22s} {mesh_moments(v, t[part == k])[0]:9.2f} mm³")
     print(f"  uncut die              {s.report['uncut_volume_mm3']:9.2f} mm³")

@@ -15,7 +15,7 @@ import pytest
 from diefab.core.errors import FabricationError
 from diefab.dice.design import load_design
 from diefab.dice.markers import LABEL_SHARE, MARGIN_FRACTION, marker_cells, marker_layout
-from diefab.fabricate.formats import threemf_bytes
+from diefab.fabricate.formats import threemf_bytes, threemf_mesh
 from diefab.fabricate.markers import MIN_PAPER_CELL_MM, QUIET_CELLS, check_cells, marked_body, net_markers
 from diefab.fabricate.net import design_net, render_net
 from diefab.fabricate.stl import build_solid, mesh_moments
@@ -237,14 +237,9 @@ def test_printed_mass_model_weighs_the_marker_pockets(d6, d6_solid):
 
 
 def test_3mf_carries_the_markers_as_its_second_part_in_the_face_planes(d6, d6_solid):
-    zf = zipfile.ZipFile(io.BytesIO(threemf_bytes(d6_solid)))
-    root = ET.fromstring(zf.read("3D/3dmodel.model"))
-    ns = {"m": "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"}
-    (obj,) = root.iterfind(".//m:object", ns)
-    verts = np.array([[float(v.get(k)) for k in "xyz"] for v in obj.iterfind(".//m:vertex", ns)])
-    triangles = list(obj.iterfind(".//m:triangle", ns))
-    tris = np.array([[int(t.get(k)) for k in ("v1", "v2", "v3")] for t in triangles])
-    part = np.array([int(t.get("p1")) for t in triangles])
+    package = threemf_bytes(d6_solid)
+    zf = zipfile.ZipFile(io.BytesIO(package))
+    verts, tris, part = threemf_mesh(package)
     assert set(part.tolist()) == {0, 1}
     config = ET.fromstring(zf.read("Metadata/Slic3r_PE_model.config"))
     extruders = [m.get("value") for v in config.iter("volume") for m in v if m.get("key") == "extruder"]

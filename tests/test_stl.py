@@ -16,7 +16,7 @@ import pytest
 from diefab.core.errors import FabricationError
 from diefab.dice.design import load_design
 from diefab.fabricate.engrave import cut_labels
-from diefab.fabricate.formats import inlay_stl_bytes, stl_bytes, threemf_bytes
+from diefab.fabricate.formats import CORE_NS, inlay_stl_bytes, stl_bytes, threemf_bytes, threemf_mesh
 from diefab.fabricate.stl import build_solid, flat_face_probabilities, mesh_moments
 from diefab.geometry.polyhedron import solid_angles
 from diefab.made.fill import Fill
@@ -281,19 +281,16 @@ def test_thin_strokes_warn(gem):
 
 
 def test_3mf_package(gem_solid):
-    zf = zipfile.ZipFile(io.BytesIO(threemf_bytes(gem_solid)))
+    package = threemf_bytes(gem_solid)
+    zf = zipfile.ZipFile(io.BytesIO(package))
     assert {"[Content_Types].xml", "_rels/.rels", "3D/3dmodel.model"} <= set(zf.namelist())
     root = ET.fromstring(zf.read("3D/3dmodel.model"))
-    ns = {"m": "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"}
+    ns = {"m": CORE_NS}
     assert root.get("unit") == "millimeter"
     colors = [base.get("displaycolor") for base in root.iterfind(".//m:basematerials/m:base", ns)]
     names = [base.get("name") for base in root.iterfind(".//m:basematerials/m:base", ns)]
     assert names == ["body", "labels"] and colors[0] != colors[1]
-    (obj,) = root.iterfind(".//m:object", ns)
-    verts = np.array([[float(v.get(k)) for k in "xyz"] for v in obj.iterfind(".//m:vertex", ns)])
-    triangles = list(obj.iterfind(".//m:triangle", ns))
-    tris = np.array([[int(t.get(k)) for k in ("v1", "v2", "v3")] for t in triangles])
-    part = np.array([int(t.get("p1")) for t in triangles])
+    verts, tris, part = threemf_mesh(package)
     volumes = {names[k]: mesh_moments(verts, tris[part == k])[0] for k in (0, 1)}
     # PrusaSlicer's config names the same two triangle ranges as the object's parts
     config = ET.fromstring(zf.read("Metadata/Slic3r_PE_model.config"))

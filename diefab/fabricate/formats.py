@@ -13,7 +13,10 @@ from diefab.core.errors import FabricationError
 if TYPE_CHECKING:
     from diefab.fabricate.stl import Solid
 
-__all__ = ["BODY_COLOR", "LABEL_COLOR", "inlay_stl_bytes", "stl_bytes", "threemf_bytes"]
+__all__ = ["BODY_COLOR", "LABEL_COLOR", "inlay_stl_bytes", "stl_bytes", "threemf_bytes", "threemf_mesh"]
+
+#: The 3MF core namespace.
+CORE_NS = "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"
 
 
 def stl_bytes(solid: Solid) -> bytes:
@@ -104,7 +107,7 @@ def threemf_bytes(solid: Solid) -> bytes:
     model = (
         '<?xml version="1.0" encoding="UTF-8"?>\n'
         '<model unit="millimeter" xml:lang="en-US" '
-        'xmlns="http://schemas.microsoft.com/3dmanufacturing/core/2015/02" '
+        f'xmlns="{CORE_NS}" '
         'xmlns:slic3rpe="http://schemas.slic3r.org/3mf/2017/06">'
         '<metadata name="slic3rpe:Version3mf">1</metadata>'
         f'<metadata name="Title">{name}</metadata>'
@@ -130,3 +133,27 @@ def threemf_bytes(solid: Solid) -> bytes:
         zf.writestr("3D/3dmodel.model", model)
         zf.writestr("Metadata/Slic3r_PE_model.config", config)
     return buf.getvalue()
+
+
+def threemf_mesh(data: bytes) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The one object of a 3MF package written by :func:`threemf_bytes`, read back.
+
+    Returns
+    -------
+    vertices : (n, 3) float
+        Millimetres.
+    triangles : (m, 3) int
+        Indices into `vertices`.
+    part : (m,) int
+        Each triangle's material: 0 the body, 1 the labels (and markers).
+    """
+    import xml.etree.ElementTree as ET
+
+    root = ET.fromstring(zipfile.ZipFile(io.BytesIO(data)).read("3D/3dmodel.model"))
+    ns = {"m": CORE_NS}
+    (obj,) = root.iterfind(".//m:object", ns)
+    vertices = np.array([[float(v.get(k)) for k in "xyz"] for v in obj.iterfind(".//m:vertex", ns)])
+    triangles = list(obj.iterfind(".//m:triangle", ns))
+    indices = np.array([[int(t.get(k)) for k in ("v1", "v2", "v3")] for t in triangles])
+    part = np.array([int(t.get("p1")) for t in triangles])
+    return vertices, indices, part
