@@ -209,7 +209,7 @@ def synthesize(
     final_model = RANK_MODEL if model == "simulation" else model
     if final_model not in MODELS:
         raise DesignError(f"model {model!r} is not available (models: {', '.join([*MODELS, 'simulation'])})")
-    run = SearchRun(seed, max_drops, deadline, workers, scheduler, settings, say, tick)
+    run = SearchRun(seed, max_drops, deadline, workers, scheduler, settings, say, tick, tolerance=tolerance)
     only = family if family in COUNTED_FAMILIES else None
     if family is None and faces is not None:  # a face count only a counted-only family has
         only = next((f for f, m in COUNTED_FAMILIES.items() if m == faces), None)
