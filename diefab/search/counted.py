@@ -223,18 +223,30 @@ def two_class_design(
         float(model_probabilities(rank, d.polyhedron, body, d.fill)[: plan.n].sum())
         for d, body in zip(scanned[a : b + 1], bodies[a : b + 1])
     ])  # fmt: skip
-    off = shares - plan.share
-    crossings = [i for i in range(len(grid) - 1) if off[i] * off[i + 1] <= 0]
-    if crossings:
-        i = min(crossings, key=lambda j: abs(grid[j] - start))
-        bracket, made = (grid[i], grid[i + 1]), fill
-        if scan_fill is not fill:  # the root as made, near the scan's (a label's weight moves it a little)
-            wide = (grid[max(i - 1, 0)], grid[min(i + 2, len(grid) - 1)])
-            ends = [model_share(v) - plan.share for v in wide]
-            bracket, made = (wide, fill) if ends[0] * ends[1] <= 0 else (bracket, scan_fill)
-        guess = brentq(lambda v: model_share(v, made) - plan.share, *bracket, xtol=1e-6)
-    else:
-        guess = float(grid[np.argmin(np.abs(off))])
+    if scan_fill is not fill:  # the made die's share: the scan's, moved by its labels' nearly constant weight
+        near = _crossing(grid, shares - plan.share, start)
+        if near is not None:
+            at = brentq(lambda v: np.interp(v, grid, shares) - plan.share, grid[near], grid[near + 1], xtol=1e-6)
+            shares = shares + (model_share(at) - plan.share)
+    i = _crossing(grid, shares - plan.share, start)
+    if i is None:
+        guess = float(grid[np.argmin(np.abs(shares - plan.share))])
+    elif scan_fill is fill:
+        guess = brentq(lambda v: model_share(v) - plan.share, grid[i], grid[i + 1], xtol=1e-6)
+    else:  # bracket the made die's root on the grid, widening from the scan's
+        a, b = i, i + 1
+        fa, fb = model_share(grid[a]) - plan.share, model_share(grid[b]) - plan.share
+        while fa * fb > 0 and (a > 0 or b < len(grid) - 1):
+            if a > 0:
+                a -= 1
+                fa = model_share(grid[a]) - plan.share
+            if fa * fb > 0 and b < len(grid) - 1:
+                b += 1
+                fb = model_share(grid[b]) - plan.share
+        if fa * fb > 0:
+            guess = float(grid[a] if abs(fa) < abs(fb) else grid[b])
+        else:
+            guess = brentq(lambda v: model_share(v) - plan.share, grid[a], grid[b], xtol=1e-6)
     why = unreadable(build(guess).polyhedron, values)
     if why is not None:
         say(f"{cand.family} ({cand.faces} faces, two classes): {why}")
@@ -286,6 +298,12 @@ def two_class_design(
     if model == "simulation":
         found.simulated_tvd = float(tvd(predicted, target.aligned(d.support)))
     return found
+
+
+def _crossing(grid: np.ndarray, off: np.ndarray, start: float) -> int | None:
+    """Index i of the sign change of `off` between grid[i] and grid[i + 1] nearest `start`, or None."""
+    crossings = [i for i in range(len(grid) - 1) if off[i] * off[i + 1] <= 0]
+    return min(crossings, key=lambda j: abs(grid[j] - start)) if crossings else None
 
 
 def _per_value(plan: TwoClass, share: float) -> np.ndarray:

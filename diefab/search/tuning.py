@@ -173,8 +173,9 @@ def tune_share(
     the measurements so far (see the module's description), reaches the
     goal; step ``k`` uses seed ``seed + k``.  It stops once the fitted
     share there is within `precision` of the goal at 95 % confidence (fitted
-    to at least two measurements within :data:`LINEAR_SPAN` of the goal), once the goal is that surely out of `bounds`, or
-    when the next step would pass `max_drops`.
+    to at least two measurements within :data:`LINEAR_SPAN` of the goal),
+    once the goal is that surely out of `bounds`, or when the next step
+    would pass `max_drops`.
 
     Parameters
     ----------
