@@ -66,3 +66,13 @@ def test_tuning_is_deterministic():
     _, share_of = _die(0.04, -0.4, -0.3, 7)
     a, b = _tune(share_of, 0.015), _tune(share_of, 0.015)
     assert a.value == b.value and a.evaluations == b.evaluations
+
+
+@pytest.mark.slow
+def test_a_tuned_die_does_not_depend_on_the_workers():
+    """The same seed and budget give the same two-class die on one worker and on two."""
+    from diefab.search.synthesis import synthesize
+
+    found = [synthesize(parse_target("3dF"), seed=3, max_drops=1500, workers=w) for w in (1, 2)]
+    assert found[0].design.params == found[1].design.params
+    assert found[0].steps == found[1].steps and found[0].drops == found[1].drops <= 1500
