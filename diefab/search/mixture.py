@@ -137,15 +137,10 @@ def fit_weights(counts: Sequence[np.ndarray], probs: Sequence[np.ndarray], penal
             grad -= 2.0 * p[:, m] @ (c[m] / q[m])
         return value, grad
 
-    best_w, best_f = alone, objective(alone)[0]
-    # a convex objective: each start reaches the same minimum value; several starts guard SLSQP at the simplex's faces
-    for start in (np.full(k, 1.0 / k), alone):
-        res = minimize(objective, start, jac=True, method="SLSQP", bounds=[(0.0, 1.0)] * k,
-                       constraints=[{"type": "eq", "fun": lambda w: w.sum() - 1.0, "jac": lambda w: np.ones(k)}],
-                       options={"ftol": FIT_TOLERANCE, "maxiter": 500})  # fmt: skip
-        w = np.clip(res.x, 0.0, None)
-        w = w / w.sum()
-        f = objective(w)[0]
-        if f < best_f - FIT_TOLERANCE:
-            best_w, best_f = w, f
-    return best_w
+    # a convex objective: one start reaches the minimum; the default alone is kept if SLSQP stops short of it
+    res = minimize(objective, np.full(k, 1.0 / k), jac=True, method="SLSQP", bounds=[(0.0, 1.0)] * k,
+                   constraints=[{"type": "eq", "fun": lambda w: w.sum() - 1.0, "jac": lambda w: np.ones(k)}],
+                   options={"ftol": FIT_TOLERANCE, "maxiter": 500})  # fmt: skip
+    w = np.clip(res.x, 0.0, None)
+    w = w / w.sum()
+    return w if objective(w)[0] < objective(alone)[0] - FIT_TOLERANCE else alone
