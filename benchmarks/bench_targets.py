@@ -65,9 +65,10 @@ def counted(target: str) -> dict | None:
 
 
 def commit() -> str:
-    """The commit this checkout is on, with ``+dirty`` when it has uncommitted changes to tracked files."""
+    """The commit this checkout is on, ``+dirty`` when tracked files other than results have changes."""
     git = lambda *a: subprocess.run(["git", *a], cwd=ROOT, capture_output=True, text=True).stdout.strip()  # noqa: E731
-    return git("rev-parse", "--short", "HEAD") + ("+dirty" if git("status", "--porcelain", "-uno") else "")
+    changed = git("status", "--porcelain", "-uno", "--", ".", ":!benchmarks/results")
+    return git("rev-parse", "--short", "HEAD") + ("+dirty" if changed else "")
 
 
 def measure(target: str, drops: int) -> dict:
