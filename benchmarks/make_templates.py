@@ -168,6 +168,29 @@ def check_made(name: str, fill: str, drops: int, chunk: int) -> dict:
                   flush=True)  # fmt: skip
 
 
+def _cell(check: dict | None) -> str:
+    if not check or check.get("tvd") is None:
+        return "not yet measured"
+    return f"{check['tvd']:.4f} ({check['drops']:,})"
+
+
+def table(results: dict) -> str:
+    """A Markdown table of the shipped templates: the die, its validated TVD solid, in paper and in print."""
+    rows = ["| template | target | die | TVD solid (drops) | paper (drops) | print (drops) | net, stl |",
+            "|---|---|---|---|---|---|---|"]  # fmt: skip
+    for name in TEMPLATES:
+        r = results.get(name, {})
+        if "validated_tvd" not in r or not (ROOT / "templates" / f"{name}.toml").is_file():
+            continue
+        made = r.get("made_validation", {})
+        warned = [c for c, m in r["made"].items() if m["exit"] or m["stderr"]]
+        solid = {"tvd": r["validated_tvd"], "drops": r["validated_drops"]}
+        rows.append(f"| `{name}` | {r['target']} | {r['faces']}-face {r['family']} ({r['method']}) | {_cell(solid)} "
+                    f"| {_cell(made.get('paper'))} | {_cell(made.get('print'))} "
+                    f"| {'warns: ' + ', '.join(warned) if warned else 'clean'} |")  # fmt: skip
+    return "\n".join(rows)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("names", nargs="*", help="Templates to make (default: all)")
@@ -176,7 +199,12 @@ def main() -> None:
     parser.add_argument("--fills", nargs="+", default=["paper", "print"], choices=sorted(MADE_SEEDS))
     parser.add_argument("--drops", type=int, default=DROPS, help="Drops of each as-made check (default 30000)")
     parser.add_argument("--chunk", type=int, default=5000, help="Drops of each as-made run (default 5000)")
+    parser.add_argument("--table", action="store_true", help="Print the Markdown table of the shipped templates")
     args = parser.parse_args()
+    if args.table:
+        with _results() as results:
+            print(table(results))
+        return
     for name in args.names or TEMPLATES:
         if name not in TEMPLATES:
             sys.exit(f"unknown template {name!r} (known: {', '.join(TEMPLATES)})")
