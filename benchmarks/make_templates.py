@@ -49,6 +49,8 @@ OPTIONS = {
     "3d6": ["--family", "icosahedral", "--size", "40", "--max-drops", "8000"],
     # the icosahedral die comes nearest 2d8 too (TVD 0.0198 by exact arithmetic), tuned as 3d6's is
     "2d8": ["--family", "icosahedral", "--size", "40", "--max-drops", "8000"],
+    # a two-class die's share moves when it is made of card: 3df made in paper rolls about 0.05 from 3dF
+    "3df-paper": ["--fill", "paper"],
 }
 #: Template name -> target.
 TEMPLATES = {
@@ -61,6 +63,7 @@ TEMPLATES = {
     "uniform-5": "uniform:5",
     "uniform-7": "uniform:7",
     "3d6": "3d6",
+    "3df-paper": "3dF",
 }
 SEED = 1
 DROPS = 30_000
