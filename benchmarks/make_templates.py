@@ -179,18 +179,22 @@ def _cell(check: dict | None) -> str:
 
 def table(results: dict) -> str:
     """A Markdown table of the shipped templates: the die, its validated TVD solid, in paper and in print."""
-    rows = ["| template | target | die | TVD solid (drops) | paper (drops) | print (drops) | net, stl |",
+    rows = ["| template | target | die | TVD solid (drops) | in paper (drops) | in print (drops) | net, stl |",
             "|---|---|---|---|---|---|---|"]  # fmt: skip
     for name in TEMPLATES:
         r = results.get(name, {})
         if "validated_tvd" not in r or not (ROOT / "templates" / f"{name}.toml").is_file():
             continue
-        made = r.get("made_validation", {})
+        options = OPTIONS.get(name, [])
+        fill = options[options.index("--fill") + 1] if "--fill" in options else "solid"
+        # the closing check of a die designed for a material is its check as made of it
+        made = {fill: {"tvd": r["validated_tvd"], "drops": r["validated_drops"]}, **r.get("made_validation", {})}
+        cells = [_cell(made.get(f)) if f in made or f != "solid" else "—" for f in ("solid", "paper", "print")]
+        if fill != "solid":
+            cells = [c if c != "not yet measured" else f"— (made of {fill})" for c in cells]
         warned = [c for c, m in r["made"].items() if m["exit"] or m["stderr"]]
-        solid = {"tvd": r["validated_tvd"], "drops": r["validated_drops"]}
-        rows.append(f"| `{name}` | {r['target']} | {r['faces']}-face {r['family']} ({r['method']}) | {_cell(solid)} "
-                    f"| {_cell(made.get('paper'))} | {_cell(made.get('print'))} "
-                    f"| {'warns: ' + ', '.join(warned) if warned else 'clean'} |")  # fmt: skip
+        rows.append(f"| `{name}` | {r['target']} | {r['faces']}-face {r['family']} ({r['method']}) | "
+                    + " | ".join(cells) + f" | {'warns: ' + ', '.join(warned) if warned else 'clean'} |")  # fmt: skip
     return "\n".join(rows)
 
 
