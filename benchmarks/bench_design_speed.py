@@ -6,10 +6,11 @@
 
 Runs each case (``design 2d6``, ``design 3dF --fill print``, at default
 options and ``--seed 0``) with this checkout and with the baseline, one
-after the other, and prints the wall time, the closing check's TVD (the
-same 10,000 drops on the same seed in both), the ratio of the times, and
-the machine's cores and load average, which decide the times on a shared
-machine.
+after the other, and prints the wall time, the CPU time of the command and
+its worker processes, the drops the search spent, the closing check's TVD
+(10,000 drops on the same seed in both), the ratio of the times, and the
+machine's cores and load average, which decide the wall times on a shared
+machine (the CPU times depend on it far less).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -29,14 +31,27 @@ CASES = {"2d6": ["2d6"], "3df-print": ["3dF", "--fill", "print"]}
 
 def run(checkout: Path, args: list[str]) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        load = os.getloadavg()[0]
         t0 = time.monotonic()
         done = subprocess.run([sys.executable, "-m", "diefab", "design", *args, "--seed", "0", "--out", tmp, "--json"],
                               cwd=checkout, capture_output=True, text=True)  # fmt: skip
         seconds = time.monotonic() - t0
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)  # the command and the workers it waited for
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    out = {"seconds": seconds, "cpu": cpu, "load": (load + os.getloadavg()[0]) / 2}
     if done.returncode not in (0, 3):
-        return {"seconds": seconds, "error": (done.stderr.strip().splitlines() or ["?"])[-1]}
+        return {**out, "error": (done.stderr.strip().splitlines() or ["?"])[-1]}
     report = json.loads(done.stdout)
-    return {"seconds": seconds, "tvd": report["validated"]["tvd"], "exit": done.returncode}
+    return {**out, "tvd": report["validated"]["tvd"], "drops": report["drops"], "exit": done.returncode}
+
+
+def describe(run: dict) -> str:
+    """One checkout's figures for one case."""
+    text = f"{run['seconds']:.0f} s wall, {run['cpu']:.0f} s CPU, load {run['load']:.1f}"
+    if "error" in run:
+        return f"{text} ({run['error']})"
+    return f"{text}, {run['drops']} search drops, TVD {run['tvd']:.4f} (exit {run['exit']})"
 
 
 def main() -> None:
@@ -48,11 +63,11 @@ def main() -> None:
     for case in args.cases:
         new = run(ROOT, CASES[case])
         old = run(args.baseline, CASES[case])
-        line = f"design {' '.join(CASES[case])}: this checkout {new['seconds']:.0f} s"
-        line += f" (TVD {new['tvd']:.4f})" if "tvd" in new else f" ({new['error']})"
-        line += f", baseline {old['seconds']:.0f} s"
-        line += f" (TVD {old['tvd']:.4f})" if "tvd" in old else f" ({old['error']})"
-        print(f"{line}; ratio baseline/this {old['seconds'] / new['seconds']:.2f}", flush=True)
+        print(f"design {' '.join(CASES[case])}:", flush=True)
+        print(f"  this checkout: {describe(new)}", flush=True)
+        print(f"  baseline:      {describe(old)}", flush=True)
+        print(f"  ratio baseline/this: wall {old['seconds'] / new['seconds']:.2f}, CPU {old['cpu'] / new['cpu']:.2f}",
+              flush=True)  # fmt: skip
     print(f"load average {os.getloadavg()[0]:.1f} at the end")
 
 

@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from diefab.core.errors import StatsError
-from diefab.search.crossval import RULES, held_out_choices, pick_candidate
+from diefab.search.crossval import RULES, held_out_choices, pick_candidate, training_rows
 
 COORDS = np.array([[1.0, 0.0], [0.0, 0.0], [1.0, 1.0]])  # the default first
 X0 = np.array([1.0, 0.0])
@@ -67,3 +67,15 @@ def test_a_held_out_die_never_moves_its_own_choice(values, die, change):
     dev[die] += np.array([change, 0.0, -change / 3])
     after = held_out_choices(NAMES, dev, COORDS, X0, 0.5, FAMILY, surface)
     assert all(before[r][die] == after[r][die] for r in RULES)
+
+
+def test_training_rows_never_hold_the_die_and_stay_among_the_given_rows():
+    for rule in RULES:
+        for i in range(len(NAMES)):
+            rows = training_rows(NAMES, i, rule, FAMILY, surface)
+            assert i not in rows
+            assert set(training_rows(NAMES, i, rule, FAMILY, surface, among=[0, 3])) <= {0, 3} - {i}
+    assert training_rows(NAMES, 0, "lofo", FAMILY, surface) == [2, 3]  # a2 is a1's family
+    assert training_rows(NAMES, 3, "loo-surface", FAMILY, surface) == []  # alone on stone
+    with pytest.raises(StatsError, match="rule"):
+        training_rows(NAMES, 0, "all", FAMILY, surface)

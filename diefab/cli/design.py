@@ -44,7 +44,8 @@ def _slug(text: str) -> str:
 @click.argument("target", metavar="TARGET")
 @click.option("--faces", type=click.IntRange(2, 120), default=None, help="Resting faces of the die (default: chosen).")
 @click.option("--family", "family_name", default="auto", show_default=True,
-              help="Die family (ngem, prism, bipyramid, trapezohedron, cuboid, freeform, gem) or auto.")  # fmt: skip
+              help="Die family (ngem, prism, bipyramid, trapezohedron, icosahedral, cuboid, freeform, gem) "
+              "or auto.")  # fmt: skip
 @fill_options("paper", "print")
 @click.option("--model", type=click.Choice(["fast", "solid-angle", "basins", "simulation"]), default="simulation",
               show_default=True,

@@ -51,7 +51,7 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
     """
     from diefab.core.files import check_outputs, ensure_dir, output_path, write_files
     from diefab.dice.notes import reading_note, small_die_warning
-    from diefab.fabricate.net import design_net, parse_formats, render_net
+    from diefab.fabricate.net import design_net, marked_net, parse_formats
     from diefab.made.pages import parse_page
 
     kinds = parse_formats(formats)
@@ -65,13 +65,8 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
     inputs = design_inputs(design, d)
     check_outputs(paths.values(), inputs)
     the_net = design_net(d, size_mm=size_mm, page=sheet, tab_width=tab_width)
-    placed = []
-    if with_markers:
-        from diefab.fabricate.markers import net_markers
-
-        placed = net_markers(d, the_net)
-    rendered = render_net(d, the_net, kinds, face_names=face_names, copies=copies, mark=mark, pips=pips,
-                          markers=placed)  # fmt: skip
+    rendered, placed = marked_net(d, the_net, kinds, markers=with_markers, face_names=face_names, copies=copies,
+                                  mark=mark, pips=pips)  # fmt: skip
     warning = small_die_warning(d, size)
     written = write_files({paths[k]: rendered[k] for k in kinds}, inputs=inputs)
     if warning:

@@ -22,7 +22,7 @@ from diefab.made.tabs import TAB_WIDTH
 from diefab.made.text import MARKS
 from diefab.made.unfold import Net, pack_copies, unfold
 
-__all__ = ["FORMATS", "design_net", "footer_texts", "parse_formats", "render_net"]
+__all__ = ["FORMATS", "design_net", "footer_texts", "marked_net", "parse_formats", "render_net"]
 
 FORMATS = ("svg", "pdf", "png")
 
@@ -117,3 +117,21 @@ def render_net(
         else:
             raise FabricationError(f"unknown format {fmt!r} (choose from {', '.join(FORMATS)})")
     return out
+
+
+def marked_net(design: Design, net: Net, formats=("svg", "pdf"), *, markers: bool = False, **options):
+    """Render `net` as :func:`render_net`, with each face's ArUco marker when `markers` (``net --markers``).
+
+    Returns
+    -------
+    files : dict of str to bytes
+        The rendered formats.
+    placed : list of NetMarker
+        The markers printed (empty without `markers`).
+    """
+    placed = []
+    if markers:
+        from diefab.fabricate.markers import net_markers
+
+        placed = net_markers(design, net)
+    return render_net(design, net, formats, markers=placed, **options), placed

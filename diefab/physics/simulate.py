@@ -220,10 +220,16 @@ def drop(
 # the parallel run
 
 
+#: Fewest drops of a batch sent to a worker (five worlds' worth of slots: a batch's last drops run in a world
+#: left mostly idle, and its free falls are integrated together, so a small batch costs more per drop).
+MIN_BATCH = 120
+
+
 def _batches(n: int, workers: int) -> list[tuple[int, int]]:
     # small enough to balance the workers and move the progress bar, big enough to keep them busy
-    size = int(np.clip(n // (workers * 16), 32, 512))
-    return [(start, min(start + size, n)) for start in range(0, n, size)]
+    size = int(np.clip(n // (workers * 16), MIN_BATCH, 512))
+    edges = np.linspace(0, n, -(-n // size) + 1).round().astype(int)  # batches of equal size
+    return [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:])]
 
 
 def _check_run(design: Design, n, seed, workers, settings: PhysicsSettings) -> int:

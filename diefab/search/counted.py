@@ -9,6 +9,8 @@ the nearest (:mod:`diefab.search.counting`) is made the same way
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from scipy.optimize import brentq
 
@@ -32,6 +34,7 @@ from diefab.search.symmetric import (
     tune_share,
     two_class_values,
 )
+from diefab.search.tuning import share_precision
 from diefab.stats.goodness import pearson_divergence, tvd
 
 __all__ = [
@@ -50,6 +53,8 @@ __all__ = [
 COUNTED_FAMILIES = {"icosahedral": 42}
 #: Smallest tipping angle (degrees) a two-class die's tuning may reach.
 STEADY_TIPPING = 9.0
+#: Shapes of a two-class die's family scanned for steadiness and the model's share.
+SCAN_POINTS = 81
 
 
 def nearest_counted(target: Target, faces: int | None, family: str | None) -> Counted | None:
@@ -170,41 +175,83 @@ def two_class_design(
     poly0 = cand.polyhedron()
     values = two_class_values(poly0, target, plan)
 
-    def build(value: float) -> Design:
+    # the scan over the family's range weighs a print without its engraved labels (placing them is most of a
+    # made body's cost, and they move the balance little); the shapes it settles on are weighed as made
+    scan_fill = replace(fill, labels=False) if fill.kind == "print" and fill.labels else fill
+
+    def build(value: float, made: Fill = fill) -> Design:
         return Design(name, cand.family, {**plan.params, plan.other: float(value)}, values=values,
-                      target=target.spec, fill=fill, size_mm=size_mm)  # fmt: skip
+                      target=target.spec, fill=made, size_mm=size_mm)  # fmt: skip
 
     rank = RANK_MODEL if model == "simulation" else model
 
-    def model_share(value: float) -> float:
-        d = build(value)
+    def model_share(value: float, made: Fill = fill) -> float:
+        d = build(value, made)
         return float(model_probabilities(rank, d.polyhedron, d.mass_properties(), d.fill)[: plan.n].sum())
 
+    def steady(d: Design) -> bool:
+        return tipping_angle(d.polyhedron, d.mass_properties().center) >= STEADY_TIPPING
+
     start = next(v for k, v in plan.params.items() if k != "n")  # the fair shape's height or slope
-    grid = np.linspace(lo, hi, 81)
+    grid = np.linspace(lo, hi, SCAN_POINTS)
     # the shapes around the fair one that stay steady: tuning never leaves them
-    steady = np.array([tipping_angle(d.polyhedron, d.mass_properties().center) for d in map(build, grid)])
-    steady = steady >= STEADY_TIPPING
+    scanned, bodies, ok = [build(v, scan_fill) for v in grid], [], []
+    for i, d in enumerate(scanned):
+        run.tick("scanning the shapes", i, len(grid))
+        bodies.append(d.mass_properties())
+        ok.append(tipping_angle(d.polyhedron, bodies[-1].center) >= STEADY_TIPPING)
+    run.tick("scanning the shapes", len(grid), len(grid))
     i0 = int(np.argmin(np.abs(grid - start)))
     a, b = i0, i0
-    while a > 0 and steady[a - 1]:
+    while a > 0 and ok[a - 1]:
         a -= 1
-    while b < len(grid) - 1 and steady[b + 1]:
+    while b < len(grid) - 1 and ok[b + 1]:
         b += 1
+    if scan_fill is not fill:  # the ends of the steady range, as made
+
+        def steady(value: float) -> bool:
+            d = build(value)
+            return tipping_angle(d.polyhedron, d.mass_properties().center) >= STEADY_TIPPING
+
+        while b > a and not steady(grid[b]):
+            b -= 1
+        while a < b and not steady(grid[a]):
+            a += 1
     grid = grid[a : b + 1]
     lo, hi = float(grid[0]), float(grid[-1])
-    shares = np.array([model_share(v) for v in grid]) - plan.share
-    crossings = [i for i in range(len(grid) - 1) if shares[i] * shares[i + 1] <= 0]
-    if crossings:
-        i = min(crossings, key=lambda j: abs(grid[j] - start))
+    shares = np.array([
+        float(model_probabilities(rank, d.polyhedron, body, d.fill)[: plan.n].sum())
+        for d, body in zip(scanned[a : b + 1], bodies[a : b + 1])
+    ])  # fmt: skip
+    if scan_fill is not fill:  # the made die's share: the scan's, moved by its labels' nearly constant weight
+        near = _crossing(grid, shares - plan.share, start)
+        if near is not None:
+            at = brentq(lambda v: np.interp(v, grid, shares) - plan.share, grid[near], grid[near + 1], xtol=1e-6)
+            shares = shares + (model_share(at) - plan.share)
+    i = _crossing(grid, shares - plan.share, start)
+    if i is None:
+        guess = float(grid[np.argmin(np.abs(shares - plan.share))])
+    elif scan_fill is fill:
         guess = brentq(lambda v: model_share(v) - plan.share, grid[i], grid[i + 1], xtol=1e-6)
-    else:
-        guess = float(grid[np.argmin(np.abs(shares))])
+    else:  # bracket the made die's root on the grid, widening from the scan's
+        a, b = i, i + 1
+        fa, fb = model_share(grid[a]) - plan.share, model_share(grid[b]) - plan.share
+        while fa * fb > 0 and (a > 0 or b < len(grid) - 1):
+            if a > 0:
+                a -= 1
+                fa = model_share(grid[a]) - plan.share
+            if fa * fb > 0 and b < len(grid) - 1:
+                b += 1
+                fb = model_share(grid[b]) - plan.share
+        if fa * fb > 0:
+            guess = float(grid[a] if abs(fa) < abs(fb) else grid[b])
+        else:
+            guess = brentq(lambda v: model_share(v) - plan.share, grid[a], grid[b], xtol=1e-6)
     why = unreadable(build(guess).polyhedron, values)
     if why is not None:
         say(f"{cand.family} ({cand.faces} faces, two classes): {why}")
         return None
-    slope = (model_share(min(guess + 0.01, hi)) - model_share(max(guess - 0.01, lo))) / (
+    slope = (model_share(min(guess + 0.01, hi), scan_fill) - model_share(max(guess - 0.01, lo), scan_fill)) / (
         min(guess + 0.01, hi) - max(guess - 0.01, lo)
     )
     say(f"{cand.family} ({cand.faces} faces): the top {plan.n} faces must take {plan.x}/{plan.x + plan.y} of the "
@@ -212,13 +259,22 @@ def two_class_design(
     steps: list[dict] = []
     value = guess
     if model == "simulation":
+        before, expected = run.used, [run.max_drops - run.used]
 
         def share_of(v: float, n: int, s: int) -> tuple[float, int]:
-            sim = run.simulate(build(v), n, s, "tuning the share")
+            sim = run.simulate(build(v), n, s, "tuning the share", total=before + expected[0])
             return float(sim.face_counts[: plan.n].sum() / max(sim.landed, 1)), int(sim.landed)
 
-        tuning = tune_share(share_of, guess, (lo, hi), plan.share, slope=slope, max_drops=run.max_drops - run.used,
-                            deadline=run.deadline, seed=seed, say=say)  # fmt: skip
+        def planned(drops: int) -> None:  # what the tuning now expects to spend: the progress bar's total
+            expected[0] = drops
+
+        precision = share_precision(plan.per_value, run.tolerance)
+        # the model's share across the range, moved to agree with the made die at the guess
+        shift = model_share(guess) - float(np.interp(guess, grid, shares)) if scan_fill is not fill else 0.0
+        tuning = tune_share(share_of, guess, (lo, hi), plan.share, slope=slope, precision=precision,
+                            modelled=lambda v: float(np.interp(v, grid, shares)) + shift,
+                            max_drops=run.max_drops - run.used, deadline=run.deadline, seed=seed, say=say,
+                            planned=planned)  # fmt: skip
         run.capped = run.capped or tuning.capped
         value = tuning.value
         goal = target.aligned(target.values)
@@ -231,7 +287,7 @@ def two_class_design(
         say(f"{cand.family} ({cand.faces} faces): tuned to {plan.other} = {value:.4f}, which cannot be read")
         return None
     if model == "simulation":  # the share the drops say the settled shape has: the goal, or near it
-        share = float(np.interp(value, *zip(*sorted((v, p) for v, p, _ in tuning.evaluations))))
+        share = tuning.share
         predicted = _per_value(plan, share)[np.searchsorted(target.values, d.support)]
     else:
         predicted = value_probabilities(d, rank)
@@ -242,6 +298,12 @@ def two_class_design(
     if model == "simulation":
         found.simulated_tvd = float(tvd(predicted, target.aligned(d.support)))
     return found
+
+
+def _crossing(grid: np.ndarray, off: np.ndarray, start: float) -> int | None:
+    """Index i of the sign change of `off` between grid[i] and grid[i + 1] nearest `start`, or None."""
+    crossings = [i for i in range(len(grid) - 1) if off[i] * off[i + 1] <= 0]
+    return min(crossings, key=lambda j: abs(grid[j] - start)) if crossings else None
 
 
 def _per_value(plan: TwoClass, share: float) -> np.ndarray:

@@ -21,6 +21,11 @@ The training dice of a held-out die (:func:`held_out_choices`):
     the same, restricted to dice rolled on the held-out die's own surface,
     and the default candidate when there is none.
 
+Which fitting method to use (a grid choice or a mixture, which candidates,
+which rule) is itself a choice made on the dice: :func:`nested_choices`
+scores the whole procedure, the choice made again without each held-out
+die by an inner leave-one-out over the others.
+
 Examples
 --------
 Two dice that both prefer candidate 1; held out, each gets it from the other:
@@ -34,13 +39,13 @@ Two dice that both prefer candidate 1; held out, each gets it from the other:
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
 from diefab.core.errors import StatsError
 
-__all__ = ["RULES", "deviance_table", "held_out_choices", "pick_candidate"]
+__all__ = ["RULES", "deviance_table", "held_out_choices", "nested_choices", "pick_candidate", "training_rows"]
 
 #: The held-out rules of :func:`held_out_choices`, in print order.
 RULES = ("loo", "lofo", "loo-surface", "lofo-surface")
@@ -89,6 +94,21 @@ def pick_candidate(dev: np.ndarray, train: Sequence[int], coords: np.ndarray, x0
     return int(np.argmin(total))
 
 
+def training_rows(names: Sequence[str], i: int, rule: str, family: Callable[[str], str],
+                  surface: Callable[[str], str], among: Sequence[int] | None = None) -> list[int]:  # fmt: skip
+    """Rows fitted on when die `i` is held out under `rule` (:data:`RULES`), from `among` (default all); never `i`."""
+    if rule not in RULES:
+        raise StatsError(f"rule={rule!r} is not one of {', '.join(RULES)}")
+    among = range(len(names)) if among is None else among
+    if rule.startswith("lofo"):
+        rows = [j for j in among if family(names[j]) != family(names[i])]
+    else:
+        rows = [j for j in among if j != i]
+    if rule.endswith("-surface"):
+        rows = [j for j in rows if surface(names[j]) == surface(names[i])]
+    return rows
+
+
 def held_out_choices(names: Sequence[str], dev: np.ndarray, coords: np.ndarray, x0: np.ndarray,
                      prior_sd: float, family: Callable[[str], str],
                      surface: Callable[[str], str]) -> dict[str, list[int]]:  # fmt: skip
@@ -98,21 +118,59 @@ def held_out_choices(names: Sequence[str], dev: np.ndarray, coords: np.ndarray, 
     The surface rules fall back to the candidate nearest `x0` (the default)
     when no training die was rolled on the held-out die's surface.
     """
-    n = len(names)
     default = int(np.argmin(((np.asarray(coords, dtype=float) - x0) ** 2).sum(axis=1)))
-    train = {"loo": lambda i: [j for j in range(n) if j != i],
-             "lofo": lambda i: [j for j in range(n) if family(names[j]) != family(names[i])]}  # fmt: skip
     out: dict[str, list[int]] = {}
     for rule in RULES:
-        base = train[rule.removesuffix("-surface")]
         picks = []
-        for i in range(n):
-            rows = base(i)
-            if rule.endswith("-surface"):
-                rows = [j for j in rows if surface(names[j]) == surface(names[i])]
-                if not rows:
-                    picks.append(default)
-                    continue
-            picks.append(pick_candidate(dev, rows, coords, x0, prior_sd))
+        for i in range(len(names)):
+            rows = training_rows(names, i, rule, family, surface)
+            picks.append(pick_candidate(dev, rows, coords, x0, prior_sd) if rows or not rule.endswith("-surface")
+                         else default)  # fmt: skip
         out[rule] = picks
+    return out
+
+
+#: A fitting method of :func:`nested_choices`: (training rows, target row) -> (K,) candidate weights.
+Method = Callable[[Sequence[int], int], np.ndarray]
+
+
+def nested_choices(
+    n: int, methods: Mapping[str, Method], inner_loss: Callable[[int, np.ndarray], float]
+) -> list[tuple[str, np.ndarray, dict[str, float]]]:
+    """Leave-one-die-out score of a *choice among methods*: the choice itself is made without the held-out die.
+
+    For each held-out die ``i`` the training dice are every other die.  Each
+    method is scored on them by an inner leave-one-out (each training die
+    ``j`` predicted by the method fitted on the training dice without ``j``,
+    scored by ``inner_loss(j, weights)``); the method of least mean inner loss
+    (the first on a tie) is fitted on all training dice and predicts ``i``.
+    Die ``i``'s real counts take no part: neither in the inner scores nor in the
+    fit.
+
+    Parameters
+    ----------
+    n : int
+        Number of dice.
+    methods : mapping of name -> callable ``(rows, target) -> (K,) weights``
+        A fitting method: the candidate weights (one-hot for a grid choice)
+        predicting die `target` from the dice `rows`.  It may restrict `rows`
+        further (to the target's surface, say) but must not look beyond them.
+    inner_loss : callable ``(j, weights) -> float``
+        How far the prediction `weights` is from die ``j``'s real counts.
+
+    Returns
+    -------
+    list of (str, (K,) float, dict)
+        Per die: the method chosen, its weights for the die, and every
+        method's mean inner loss.
+    """
+    if not methods:
+        raise StatsError("no method to choose from")
+    out = []
+    for i in range(n):
+        train = [j for j in range(n) if j != i]
+        inner = {name: float(np.mean([inner_loss(j, fit([r for r in train if r != j], j)) for j in train]))
+                 for name, fit in methods.items()}  # fmt: skip
+        best = min(inner, key=lambda name: inner[name])
+        out.append((best, methods[best](train, i), inner))
     return out

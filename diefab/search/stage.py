@@ -62,20 +62,26 @@ class SearchRun:
     tick: Callable[[str, int, int], None]
     used: int = 0
     capped: bool = False
+    #: Largest TVD of a die that rolls like its target (a tuning stops once its error is well within it).
+    tolerance: float = 0.02
 
     def note_cap(self) -> None:
         """Record that the wall-time cap has passed (the stage that just ended may have been cut)."""
         self.capped = self.capped or time.monotonic() > self.deadline
 
-    def simulate(self, design: Design, n: int, seed: int, stage: str, settings=None):
-        """Drop `design` `n` times, counting the drops against the budget and ticking `stage`."""
+    def simulate(self, design: Design, n: int, seed: int, stage: str, settings=None, total: int | None = None):
+        """Drop `design` `n` times, counting the drops against the budget and ticking `stage`.
+
+        The stage's progress runs to `total` drops of the whole search
+        (default: the budget).
+        """
         from diefab.physics.simulate import simulate
 
         before = self.used
+        end = min(self.max_drops if total is None else max(total, before + n), self.max_drops)
         result = simulate(design, n, seed=seed, workers=self.workers, scheduler=self.scheduler,
                           settings=settings if settings is not None else self.settings,
-                          progress=lambda done, total: self.tick(stage, min(before + done, self.max_drops),
-                                                                 self.max_drops))  # fmt: skip
+                          progress=lambda done, _: self.tick(stage, min(before + done, end), end))  # fmt: skip
         self.used += n
-        self.tick(stage, min(self.used, self.max_drops), self.max_drops)
+        self.tick(stage, min(self.used, end), end)
         return result

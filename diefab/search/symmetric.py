@@ -43,8 +43,6 @@ Examples
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable
 from dataclasses import dataclass
 from fractions import Fraction
 from functools import cache
@@ -56,6 +54,7 @@ from scipy.optimize import minimize_scalar
 from diefab.dice.families import family as get_family
 from diefab.dice.targets import Target
 from diefab.geometry.polyhedron import Polyhedron, face_margins
+from diefab.search.tuning import Tuning, tune_share
 
 __all__ = [
     "MAX_ASPECT",
@@ -317,112 +316,3 @@ def two_class_values(poly: Polyhedron, target: Target, plan: TwoClass) -> dict[s
     bottom = _spread(values[::-1], list(plan.beta)[::-1])  # high values below low ones: spread round the die
     names = poly.names
     return {**dict(zip(names[: plan.n], top)), **dict(zip(names[plan.n :], bottom))}
-
-
-@dataclass
-class Tuning:
-    """What :func:`tune_share` measured: each evaluation, and the parameter value it settled on."""
-
-    value: float
-    #: (parameter value, top-half share, landed drops) of each simulation.
-    evaluations: list[tuple[float, float, int]]
-    #: True if the wall-time cap, not the drop budget or convergence, ended the search.
-    capped: bool = False
-
-
-def _root(points: list[tuple[float, float, int]], goal: float) -> float | None:
-    """Where the share reaches `goal`, from (value, share, drops) measurements, or None.
-
-    Between the closest measurements on either side of the goal (a
-    bracket), the straight line through them; without a bracket, the line
-    through the two measurements nearest the goal, weighted by drops.
-    """
-    above = [p for p in points if p[1] >= goal]
-    below = [p for p in points if p[1] < goal]
-    if above and below:
-        # the tightest bracket: the pair, one on each side, closest in value
-        a, b = min(((a, b) for a in above for b in below), key=lambda ab: abs(ab[0][0] - ab[1][0]))
-        return float(a[0] + (goal - a[1]) * (b[0] - a[0]) / (b[1] - a[1]))
-    near = sorted(points, key=lambda e: abs(e[1] - goal))[:2]
-    if len(near) < 2 or near[0][0] == near[1][0] or near[0][1] == near[1][1]:
-        return None
-    (x0, p0, _), (x1, p1, _) = near
-    return float(x0 + (goal - p0) * (x1 - x0) / (p1 - p0))
-
-
-def tune_share(
-    share_of: Callable[[float, int, int], tuple[float, int]],
-    start: float,
-    bounds: tuple[float, float],
-    goal: float,
-    *,
-    slope: float,
-    max_drops: int = 64_000,
-    deadline: float = float("inf"),
-    drops: tuple[int, ...] = (1000, 2000, 3000, 4000, 6000),
-    seed: int = 0,
-    say: Callable[[str], None] = lambda text: None,
-) -> Tuning:
-    """Find the parameter value at which the top half takes `goal` of the landings, by simulation.
-
-    A secant search on noisy measurements, kept inside a bracket once one
-    is found (regula falsi): each step simulates more drops than the last
-    (`drops`, then its last entry), and the next value is where the line
-    through the closest measurements on either side of the goal reaches it.
-    Every step uses the same `seed` (common random numbers), so differences
-    between steps are mostly the shape's.
-
-    Parameters
-    ----------
-    share_of : callable(value, drops, seed) -> (share, landed)
-        Simulates the die with its tuned parameter at `value`.
-    start : float
-        First value (a model's guess).
-    slope : float
-        A model's d(share)/d(value) near `start`, for the first step.
-    max_drops : int
-        Most drops in all: no step starts that would exceed it (the first
-        always runs).  The result is a function of this budget and `seed`.
-    deadline : float, optional
-        ``time.monotonic()`` after which no new step starts: a wall-time cap
-        (:attr:`Tuning.capped` says it ended the search).
-
-    Returns
-    -------
-    Tuning
-        The value settled on: the last bracket's (or line's) root, or the
-        measured value nearest the goal when there is neither.
-    """
-    lo, hi = bounds
-    span = hi - lo
-    points: list[tuple[float, float, int]] = []
-    value, used, capped = float(np.clip(start, lo, hi)), 0, False
-    for step in range(32):
-        n = drops[min(step, len(drops) - 1)]
-        if points and used + n > max_drops:
-            break
-        if points and time.monotonic() > deadline:
-            capped = True
-            break
-        share, landed = share_of(value, n, seed)
-        used += n
-        points.append((value, share, landed))
-        error = 1.96 * np.sqrt(goal * (1 - goal) / max(landed, 1))
-        say(f"tuning: {value:.4f} gives the top half {share:.4f} of {landed} landings (goal {goal:.4f} ± {error:.4f})")
-        if step >= 2 and landed >= 3000 and abs(share - goal) < error:
-            break
-        root = _root(points, goal) if len(points) > 1 else None
-        if root is None:
-            root = value + (goal - share) / slope if slope else value + 0.1 * span * np.sign(goal - share)
-        sides = [p[1] >= goal for p in points[-3:]]
-        if len(sides) == 3 and len(set(sides)) == 1 and any((p[1] >= goal) != sides[0] for p in points):
-            # three in a row on one side of a bracket: halve the gap to its other end (the Illinois rule)
-            far = min((p for p in points if (p[1] >= goal) != sides[0]), key=lambda p: abs(p[0] - root))
-            root = 0.5 * (root + far[0])
-        tried = [p[0] for p in points]
-        reach = 0.25 * span
-        value = float(np.clip(root, max(lo, min(tried) - reach), min(hi, max(tried) + reach)))
-    settled = _root(points, goal) if len(points) > 1 else None
-    if settled is None or not lo <= settled <= hi:
-        settled = min(points, key=lambda e: abs(e[1] - goal))[0]
-    return Tuning(float(settled), points, capped)

@@ -209,16 +209,18 @@ def synthesize(
     final_model = RANK_MODEL if model == "simulation" else model
     if final_model not in MODELS:
         raise DesignError(f"model {model!r} is not available (models: {', '.join([*MODELS, 'simulation'])})")
-    run = SearchRun(seed, max_drops, deadline, workers, scheduler, settings, say, tick)
+    run = SearchRun(seed, max_drops, deadline, workers, scheduler, settings, say, tick, tolerance=tolerance)
     only = family if family in COUNTED_FAMILIES else None
     if family is None and faces is not None:  # a face count only a counted-only family has
         only = next((f for f, m in COUNTED_FAMILIES.items() if m == faces), None)
     if only is not None:
         return counted_family(target, faces, only, name, fill, size_mm, model, final_model, run)
+    tick("listing the dice that fit", 0, 1)
     try:
         pool = candidates(target, faces, family)
     except DesignError as exc:
         raise DesignError(f"{exc}{nearest_faces_clause(target, faces)}") from None
+    tick("listing the dice that fit", 1, 1)
     fair = fair_design(next((c for c in pool if c.exact), None), target, name, fill, size_mm, final_model, say)
     if fair is not None:
         return fair
@@ -226,7 +228,9 @@ def synthesize(
         found = two_class_design(cand, target, name, fill, size_mm, model, run)
         if found is not None:
             return found
+    tick("counting the nearest fair or two-class die", 0, 1)
     nearest = nearest_counted(target, faces, family)
+    tick("counting the nearest fair or two-class die", 1, 1)
     if nearest is not None:
         say(f"nearest counted die: {nearest.faces}-face {nearest.kind}, TVD {float(nearest.tvd):.4f} "
             "by exact arithmetic")  # fmt: skip
@@ -271,6 +275,7 @@ def synthesize(
         raise DesignError(f"no stable, readable die found for target {target.spec!r} (tried {len(tried)} dice)"
                           f"{cut}{nearest_faces_clause(target, faces)}")  # fmt: skip
     # the polish: under the final model, from the ranked winner
+    tick(f"polishing under the {final_model} model", 0, 1)
     try:
         again = optimize_design(best.design, model=final_model, min_margin=min_margin, starts=0, seed=seed,
                                 name=name, deadline=deadline, budget=POLISH_EVALUATIONS)  # fmt: skip
@@ -278,6 +283,7 @@ def synthesize(
         best = again
     except DesignError as exc:
         say(f"the {final_model} model finds no stable die from the solid-angle optimum: {exc}")
+    tick(f"polishing under the {final_model} model", 1, 1)
     run.note_cap()
     out = Synthesis(best.design, best.objective, best.values, final_model, tried)
     if model == "simulation":

@@ -22,18 +22,13 @@ def write_net(design: Design, out_dir: Path, *, page: str = "A4", formats: tuple
               tab_width: float = 5.0, markers: bool = False) -> list[Path]:  # fmt: skip
     """Write the paper net of `design` (as ``diefab net``, with ``--markers`` if `markers`); the files written."""
     from diefab.core.files import ensure_dir, output_path, write_files
-    from diefab.fabricate.net import design_net, render_net
+    from diefab.fabricate.net import design_net, marked_net
     from diefab.made.pages import parse_page
 
     ensure_dir(out_dir)
     net = design_net(design, page=parse_page(page), tab_width=tab_width)
-    placed = []
-    if markers:
-        from diefab.fabricate.markers import net_markers
-
-        placed = net_markers(design, net)
-    rendered = render_net(design, net, formats, face_names=face_names, copies=copies, mark=mark, pips=pips,
-                          markers=placed)  # fmt: skip
+    rendered, _ = marked_net(design, net, formats, markers=markers, face_names=face_names, copies=copies, mark=mark,
+                             pips=pips)  # fmt: skip
     paths = {k: _inside(out_dir, output_path(out_dir, design.name, f"-net.{k}")) for k in formats}
     return write_files({paths[k]: rendered[k] for k in formats})
 
