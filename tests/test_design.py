@@ -151,7 +151,17 @@ f6 = 6
 
 @pytest.mark.parametrize(
     ("spec", "template"),
-    [("3dF", "3df"), ("binomial:4", "binomial-4"), ("UNIFORM:3", "uniform-3"), ("2d6", "2d6"), ("3d6", "3d6")],
+    [
+        ("3dF", "3df"),
+        ("binomial:4", "binomial-4"),
+        ("UNIFORM:3", "uniform-3"),
+        ("2d6", "2d6"),
+        ("3d6", "3d6"),
+        ("2d4", "2d4"),
+        ("2d8", "2d8"),
+        ("uniform:5", "uniform-5"),
+        ("uniform:7", "uniform-7"),
+    ],  # fmt: skip
 )
 def test_a_target_name_finds_its_ready_made_die(spec, template):
     from diefab.dice.design import list_templates, template_path

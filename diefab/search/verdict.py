@@ -171,6 +171,12 @@ def judge(
             + (f": the smallest probability {_fraction(p)} (value {value}) needs a face that lands {float(p):.2%} "
                f"of the time, and the smallest face of that die lands {face:.2%}" if face > 1.5 * float(p) else "")
         )  # fmt: skip
+    elif nearest.tvd > 0.5 * tolerance:
+        reasons.append(
+            f"the nearest steady fair or two-class die (the {nearest.faces}-face {nearest.kind} die) is itself TVD "
+            f"{float(nearest.tvd):.4f} from the target, which leaves {tolerance - float(nearest.tvd):.4f} of the "
+            "tolerance for tuning its share and for the closing check's noise"
+        )  # fmt: skip
     if method == "shaped" and simulated_tvd is not None:
         reasons.append(f"the shaped die's refinement reached simulated TVD {simulated_tvd:.4f}")
     if max_drops is not None and drops + 16_000 > max_drops and (simulated_tvd is None or simulated_tvd > tolerance):
@@ -179,7 +185,7 @@ def judge(
     if noise > 0.5 * tolerance:
         reasons.append(f"at {check['n']} drops a die that rolled the target exactly would still show TVD about "
                        f"{noise:.4f} (more --validate-sims measures it closer)")  # fmt: skip
-    if not reasons:
+    if not reasons or (nearest is not None and distance > float(nearest.tvd) + tolerance):
         reasons.append("the closing check's drops disagree with the search's")
     why = f"validated TVD {distance:.4f} is above the tolerance {tolerance:g}: " + "; ".join(reasons)
     return Verdict(False, distance, tolerance, why)
