@@ -141,12 +141,19 @@ def render(
     *,
     textures: dict | None = None,
 ) -> np.ndarray:
-    """A grayscale frame (h, w) uint8 of the die at `rotation`, `position` (world, mm) seen from `view`."""
+    """A grayscale frame (h, w) uint8 of the die at `rotation`, `position` (world, mm) seen from `view`.
+
+    `textures` caches the marker textures and the last table between frames of one camera.
+    """
     import cv2
 
     rng = np.random.default_rng(conditions.seed)
     w, h = view.width, view.height
-    image = _table(np.random.default_rng(conditions.table_seed), w, h, conditions.table)
+    textures = {} if textures is None else textures
+    key = (conditions.table_seed, w, h, conditions.table)  # a fixed camera films one table: the last is kept
+    if textures.get("table", (None,))[0] != key:
+        textures["table"] = (key, _table(np.random.default_rng(conditions.table_seed), w, h, conditions.table))
+    image = textures["table"][1].copy()
     poly = design.polyhedron
     s = design.mm_per_unit
     r_cam, t_cam = view.to_camera(rotation, position)
@@ -166,12 +173,17 @@ def render(
     )
     shadow_cam = (ring - view.position) @ view.rotation.T
     uv = shadow_cam @ k.T
-    shadow = np.zeros((h, w), np.float32)
-    cv2.fillPoly(shadow, [np.round(uv[:, :2] / uv[:, 2:3] * 16).astype(np.int32)], 1.0, cv2.LINE_AA, shift=4)
-    shadow = cv2.GaussianBlur(
-        shadow, (0, 0), max(2.0, 0.15 * spread * k[0, 0] / max(float(shadow_cam[:, 2].mean()), 1.0))
-    )
-    image *= 1.0 - 0.45 * shadow
+    ring_px = uv[:, :2] / uv[:, 2:3]
+    sigma = max(2.0, 0.15 * spread * k[0, 0] / max(float(shadow_cam[:, 2].mean()), 1.0))
+    # blurred on its own box, padded past the kernel's reach: the same as blurring the whole frame
+    pad = int(math.ceil(4 * sigma)) + 2
+    x0, y0 = np.floor(ring_px.min(axis=0)).astype(int) - pad
+    x1, y1 = np.ceil(ring_px.max(axis=0)).astype(int) + pad
+    x0, y0, x1, y1 = max(x0, 0), max(y0, 0), min(x1, w), min(y1, h)
+    if x1 > x0 and y1 > y0:
+        shadow = np.zeros((y1 - y0, x1 - x0), np.float32)
+        cv2.fillPoly(shadow, [np.round((ring_px - [x0, y0]) * 16).astype(np.int32)], 1.0, cv2.LINE_AA, shift=4)
+        image[y0:y1, x0:x1] *= 1.0 - 0.45 * cv2.GaussianBlur(shadow, (0, 0), sigma)
 
     light = np.asarray(conditions.light, dtype=float)
     light = light / np.linalg.norm(light)
@@ -179,7 +191,6 @@ def render(
     centres_cam = (poly.face_centroids * s) @ r_cam.T + t_cam
     facing = np.einsum("ij,ij->i", normals @ view.rotation.T, centres_cam) < 0
     order = [f for f in np.argsort(-centres_cam[:, 2]) if facing[f]]
-    textures = {} if textures is None else textures
     rows = {int(f): j for j, f in enumerate(layout.faces)}
     albedo = 225.0
     for f in order:
@@ -242,9 +253,10 @@ def _degrade(image: np.ndarray, c: Conditions, rng: np.random.Generator) -> np.n
         cv2.circle(mask, (int(x), int(y)), int(width / 2), 1.0, -1, cv2.LINE_AA)
         skin = 150.0 + 25.0 * cv2.GaussianBlur(rng.normal(0, 1, (h, w)).astype(np.float32), (0, 0), 6)
         image = image * (1 - mask) + skin * mask
-    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    xx = np.arange(w, dtype=np.float32)[None, :]
+    yy = np.arange(h, dtype=np.float32)[:, None]
     light = c.gain * (1 + c.gradient[0] * (xx / w - 0.5) + c.gradient[1] * (yy / h - 0.5))
-    image = image * light
+    image = image * light.astype(np.float32)
     if c.motion != (0.0, 0.0):
         length = max(1, int(round(math.hypot(*c.motion))))
         kernel = np.zeros((2 * length + 1, 2 * length + 1), np.float32)
@@ -255,7 +267,7 @@ def _degrade(image: np.ndarray, c: Conditions, rng: np.random.Generator) -> np.n
     if c.blur > 0.05:
         image = cv2.GaussianBlur(image, (0, 0), c.blur)
     if c.noise > 0:
-        image = image + rng.normal(0, c.noise, image.shape).astype(np.float32)
+        image = image + np.float32(c.noise) * rng.standard_normal(image.shape, dtype=np.float32)
     out = np.clip(image, 0, 255).astype(np.uint8)
     if c.jpeg:
         ok, data = cv2.imencode(".jpg", out, [cv2.IMWRITE_JPEG_QUALITY, int(c.jpeg)])

@@ -10,9 +10,9 @@ whether the frame moved, and says when a roll is over:
   the same face at the reader's confidence and none read another, else
   ``unread`` (value None) -- a die in motion, a hand over it, a pose that
   does not say one face clearly is never guessed;
-* a settle whose pose is the last counted roll's (the same place and
-  orientation: a hand passed over a die that did not move, the light
-  changed) counts nothing.
+* a settle whose pose is the last counted roll's (the same face, place and
+  turn on the table, judged on the markers' image corners: a hand passed
+  over a die that did not move, the light changed) counts nothing.
 
 Examples
 --------
@@ -34,7 +34,9 @@ from diefab.camera.pose import FrameRead
 
 __all__ = ["Roll", "Settler", "same_rest"]
 
-#: Two rests on the same face are the same when the markers seen in both moved less than this many marker sides.
+#: Two rests on the same face are the same when each corner of the markers seen in both moved less than this many
+#: marker sides (on average): the same place and the same turn, so a die dropped again that lands on the same face,
+#: near the same place but turned, counts.
 SAME_PLACE = 0.5
 #: The die moved between two frames when a marker seen in both moved more than this many marker sides.
 STILL_PLACE = 0.2
@@ -50,9 +52,11 @@ class Roll:
     confidence: float
 
 
-def marker_shift(a, b) -> float | None:
-    """How far the markers seen in both frames moved (median of their centres), in marker sides (None: none in common).
+def marker_shift(a, b, *, corners: bool = False) -> float | None:
+    """How far the markers seen in both frames moved, in marker sides (None: none in common).
 
+    The median over the markers of how far each one's centre moved, or with `corners` of how far its
+    corners moved (on average, each to its own): a turn in place moves the corners, not the centre.
     Measured on the image, not on the poses: a lone marker's pose may flip between its two planar
     solutions from frame to frame while the die lies still.
     """
@@ -65,13 +69,14 @@ def marker_shift(a, b) -> float | None:
     for m in common:
         p, q = np.asarray(a.corners[m]), np.asarray(b.corners[m])
         side = float(np.linalg.norm(p - np.roll(p, 1, axis=0), axis=1).mean())
-        shifts.append(float(np.linalg.norm(p.mean(axis=0) - q.mean(axis=0))) / max(side, 1.0))
+        moved = np.linalg.norm(p - q, axis=1).mean() if corners else np.linalg.norm(p.mean(axis=0) - q.mean(axis=0))
+        shifts.append(float(moved) / max(side, 1.0))
     return float(np.median(shifts))
 
 
 def same_rest(a, b) -> bool:
-    """Whether reads `a` and `b` (:class:`~.pose.FrameRead`) show the die on the same face in the same place."""
-    shift = marker_shift(a, b)
+    """Whether reads `a` and `b` (:class:`~.pose.FrameRead`) show the die on the same face, place and turn."""
+    shift = marker_shift(a, b, corners=True)
     return a.face == b.face and shift is not None and shift < SAME_PLACE
 
 
