@@ -58,7 +58,7 @@ def main() -> None:
         fig.savefig(IMG / "net-and-die.png")
         for name in ("fudge-gem-paper-net.png", "fudge-gem-print-preview.png"):
             (IMG / name).write_bytes((out / name).read_bytes())
-        diefab("design", "2d6", "--out", str(out))  # several minutes
+        diefab("design", "2d6", "--out", str(out))  # about a minute
         diefab("net", str(out / "bipyramid-2d6.toml"), "--format", "png", "--out", str(out))
         diefab("stl", str(out / "bipyramid-2d6.toml"), "--preview", "--out", str(out))
         for name in ("bipyramid-2d6-net.png", "bipyramid-2d6-preview.png"):
