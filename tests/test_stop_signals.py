@@ -38,13 +38,19 @@ SLOW_TEARDOWN = textwrap.dedent(
 )
 
 
+def _hangups_heard() -> None:
+    """In the child: hang-ups at their default, as in a terminal (under nohup they arrive ignored, and stay so)."""
+    signal.signal(signal.SIGHUP, signal.SIG_DFL)
+
+
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="process groups")
 @pytest.mark.parametrize("signum", [signal.SIGHUP, signal.SIGTERM, signal.SIGINT])
 def test_a_stop_during_the_interpreters_teardown_leaves_the_exit_status(tmp_path, signum):
     (tmp_path / "sitecustomize.py").write_text(SLOW_TEARDOWN)
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), str(ROOT)])}
     proc = subprocess.Popen([sys.executable, "-m", "diefab", "templates"], cwd=tmp_path, env=env, text=True,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)  # fmt: skip
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True,
+                            preexec_fn=_hangups_heard)  # fmt: skip
     try:
         assert proc.stderr.readline() == "tearing down\n"  # the command has finished; the handlers are reset
         os.killpg(proc.pid, signum)
@@ -129,7 +135,8 @@ def test_a_stop_as_the_command_lets_go_of_its_locks_is_one_line_and_no_lock_file
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), str(ROOT)])}
     out = tmp_path / "out"
     proc = subprocess.run([sys.executable, "-m", "diefab", "roll", "d6", "--out", str(out)], env=env, text=True,
-                          stdin=subprocess.DEVNULL, capture_output=True, timeout=120)  # fmt: skip
+                          stdin=subprocess.DEVNULL, capture_output=True, timeout=120,
+                          preexec_fn=_hangups_heard)  # fmt: skip
     lines = proc.stderr.splitlines()
     assert proc.returncode == 130 and lines[-1] == "diefab: interrupted" and "Traceback" not in proc.stderr, lines
     assert "needs a terminal" in lines[0]  # the command's own end came first: it took its lock, then refused

@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import json
 import os
+import signal
 
 import numpy as np
 import pytest
@@ -146,6 +147,7 @@ def _roll_in_a_terminal(folder, keys: bytes, close: bool) -> int:
     pid, fd = pty.fork()
     if pid == 0:  # the child: the command, at the terminal
         os.environ["PYTHONPATH"] = root
+        signal.signal(signal.SIGHUP, signal.SIG_DFL)  # as in a terminal (under nohup it arrives ignored)
         os.execv(sys.executable, [sys.executable, "-m", "diefab", "roll", "d6", "--out", str(folder)])
     shown, deadline = b"", time.monotonic() + 120
     try:
