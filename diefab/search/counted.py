@@ -189,8 +189,8 @@ def two_class_design(
         d = build(value, made)
         return float(model_probabilities(rank, d.polyhedron, d.mass_properties(), d.fill)[: plan.n].sum())
 
-    def steady(d: Design) -> bool:
-        return tipping_angle(d.polyhedron, d.mass_properties().center) >= STEADY_TIPPING
+    def steady(d: Design, body=None) -> bool:
+        return tipping_angle(d.polyhedron, (d.mass_properties() if body is None else body).center) >= STEADY_TIPPING
 
     start = next(v for k, v in plan.params.items() if k != "n")  # the fair shape's height or slope
     grid = np.linspace(lo, hi, SCAN_POINTS)
@@ -199,7 +199,7 @@ def two_class_design(
     for i, d in enumerate(scanned):
         run.tick("scanning the shapes", i, len(grid))
         bodies.append(d.mass_properties())
-        ok.append(tipping_angle(d.polyhedron, bodies[-1].center) >= STEADY_TIPPING)
+        ok.append(steady(d, bodies[-1]))
     run.tick("scanning the shapes", len(grid), len(grid))
     i0 = int(np.argmin(np.abs(grid - start)))
     a, b = i0, i0
@@ -208,14 +208,9 @@ def two_class_design(
     while b < len(grid) - 1 and ok[b + 1]:
         b += 1
     if scan_fill is not fill:  # the ends of the steady range, as made
-
-        def steady(value: float) -> bool:
-            d = build(value)
-            return tipping_angle(d.polyhedron, d.mass_properties().center) >= STEADY_TIPPING
-
-        while b > a and not steady(grid[b]):
+        while b > a and not steady(build(grid[b])):
             b -= 1
-        while a < b and not steady(grid[a]):
+        while a < b and not steady(build(grid[a])):
             a += 1
     grid = grid[a : b + 1]
     lo, hi = float(grid[0]), float(grid[-1])
