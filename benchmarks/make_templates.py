@@ -51,6 +51,12 @@ OPTIONS = {
     "2d8": ["--family", "icosahedral", "--size", "40", "--max-drops", "8000"],
     # a two-class die's share moves when it is made of card: 3df made in paper rolls about 0.05 from 3dF
     "3df-paper": ["--fill", "paper"],
+    # the icosahedral dice's share moves made too (3d6 made rolls 0.04-0.05 from 3d6): tuned as made
+    **{
+        f"{die}-{fill}": ["--family", "icosahedral", "--size", "40", "--max-drops", "8000", "--fill", fill]
+        for die in ("3d6", "2d8")
+        for fill in ("paper", "print")
+    },
 }
 #: Template name -> target.
 TEMPLATES = {
@@ -64,6 +70,10 @@ TEMPLATES = {
     "uniform-7": "uniform:7",
     "3d6": "3d6",
     "3df-paper": "3dF",
+    "3d6-paper": "3d6",
+    "3d6-print": "3d6",
+    "2d8-paper": "2d8",
+    "2d8-print": "2d8",
 }
 SEED = 1
 DROPS = 30_000
