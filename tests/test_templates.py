@@ -87,3 +87,13 @@ def test_net_of_a_target_names_the_template_it_used(run, tmp_path):
     code, out, err = run("net", "3df", "--out", tmp_path, "--format", "svg", "--json")
     assert code == 0, err
     assert json.loads(out)["template"] == "3df"
+
+
+def test_a_check_made_of_card_takes_the_die_designed_for_card(run):
+    code, out, err = run("predict", "3dF", "--fill", "paper", "--json")
+    assert code == 0, err
+    data = json.loads(out)
+    assert data["design"] == "3df-paper" and data["fill"] == "paper"
+    code, out, err = run("predict", "3dF", "--json")
+    assert code == 0, err
+    assert json.loads(out)["design"] == "3df"
