@@ -78,6 +78,8 @@ TEMPLATES = {
 }
 SEED = 1
 DROPS = 30_000
+#: How the table says a die designed for a fill is made.
+MADE_AS = {"paper": "made of card", "print": "printed"}
 #: First seed of the as-made validation runs of each fill (seeds no design search uses).
 MADE_SEEDS = {"paper": 1001, "print": 2001}
 
@@ -202,7 +204,7 @@ def table(results: dict) -> str:
         made = {fill: {"tvd": r["validated_tvd"], "drops": r["validated_drops"]}, **r.get("made_validation", {})}
         cells = [_cell(made.get(f)) if f in made or f != "solid" else "—" for f in ("solid", "paper", "print")]
         if fill != "solid":
-            cells = [c if c != "not yet measured" else f"— (made of {fill})" for c in cells]
+            cells = [c if c != "not yet measured" else f"— ({MADE_AS[fill]})" for c in cells]
         warned = [c for c, m in r["made"].items() if m["exit"] or m["stderr"]]
         # 3: the closing check above the tolerance; a die validated apart from its design had no closing check
         status = f"{r['exit']}{' (no closing check)' * ('validation' in r)}"
