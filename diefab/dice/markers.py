@@ -1,12 +1,16 @@
 """Fiducial markers on a die's faces: which marker goes on which face, and where.
 
 Every face large enough carries one ArUco marker (OpenCV's ``cv2.aruco``
-dictionaries): face k carries marker id k of the smallest dictionary that
-holds one id per face (:data:`DICTIONARIES`), so the layout follows from the
-design alone.  The marker is a square in the face's label frame (x along the
-baseline, y up, as the value label reads): as large as the face allows inside
-a margin, and where the face also carries a value label, a share of that size
-pushed to the side that leaves the label the most room.
+dictionaries), and a face so large that one marker toward each of its corners
+is still large (:data:`MULTI_SIDE_FRACTION`: a cube's) carries one there, so
+that a finger over part of a die that shows only that face leaves a marker in
+view.  The markers are numbered 0, 1, ... face by face in the smallest
+dictionary that holds them all (:data:`DICTIONARIES`), so the layout follows
+from the design alone.  A marker is a square in the face's label frame (x
+along the baseline, y up, as the value label reads): as large as the face
+allows inside a margin, and where the face also carries a value label, a share
+of that size pushed to the side that leaves the label the most room (or, with
+a marker toward each corner, the middle of the face).
 
 The layout is geometry only (model units); the sticker sheet, the net, the
 solid and the camera all read the same squares, so a printed die and the
@@ -16,8 +20,8 @@ Examples
 --------
 >>> from diefab.dice.design import load_design
 >>> layout = marker_layout(load_design("d6"))
->>> layout.dictionary, layout.ids.tolist()
-('DICT_4X4_50', [0, 1, 2, 3, 4, 5])
+>>> layout.dictionary, len(layout.ids), layout.faces[:8].tolist()
+('DICT_4X4_50', 24, [0, 0, 0, 0, 1, 1, 1, 1])
 >>> bool(np.allclose(np.linalg.norm(layout.corners[0, 0] - layout.corners[0, 1]), layout.sides[0]))
 True
 """

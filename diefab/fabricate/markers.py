@@ -25,8 +25,8 @@ Examples
 >>> from diefab.fabricate.net import design_net
 >>> d6 = load_design("d6")
 >>> marks = net_markers(d6, design_net(d6))
->>> [m.marker_id for m in marks], round(marks[0].side_mm, 2), round(marks[0].cell_mm, 2)
-([0, 1, 2, 3, 4, 5], 8.73, 1.45)
+>>> len(marks), [m.face for m in marks][:5], round(marks[0].side_mm, 2), round(marks[0].cell_mm, 2)
+(24, ['f1', 'f1', 'f1', 'f1', 'f2'], 4.09, 0.68)
 """
 
 from __future__ import annotations
