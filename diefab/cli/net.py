@@ -38,7 +38,7 @@ SIZE_HELP = (
               help="Mark on a label that reads as another label of the die upside down (6 and 9).")  # fmt: skip
 @click.option("--pips", is_flag=True, help="Draw values 1 to 9 as pips.")
 @click.option("--markers", "with_markers", is_flag=True,
-              help="Print each face's ArUco marker beside its value, for diefab read.")  # fmt: skip
+              help="Print each face's ArUco markers beside its value, for diefab read.")  # fmt: skip
 @fill_options("paper", kind=False)
 @out_option
 @json_option
