@@ -1,0 +1,66 @@
+"""The die as the engine holds it: one pyramid per face, each face exactly flat, together the whole die."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial import ConvexHull
+from scipy.stats import chi2
+
+from diefab.dice.design import Design, load_design
+from diefab.physics.shapes import face_pyramids
+from diefab.physics.simulate import simulate
+from diefab.physics.world import die_body
+from diefab.search.symmetric import fair_shapes
+
+
+def fair_die(faces: int) -> Design:
+    """The steadiest fair die with `faces` faces that diefab offers, each face its own value."""
+    ((family, params),) = fair_shapes(faces)
+    return Design(
+        f"fair-{faces}", family, params, values={f"f{k + 1}": k + 1 for k in range(faces)}, target=f"uniform:{faces}"
+    )
+
+
+@pytest.mark.parametrize("name", ["d6", "d20", "fudge-gem", "3df"])
+def test_pyramids_are_flat_faced_and_fill_the_die(name):
+    d = load_design(name)
+    body = die_body(d.polyhedron, d.mass_properties())
+    pyramids = face_pyramids(body.vertices, body.normals, body.faces)
+    assert len(pyramids) == len(body.normals)
+    volume = 0.0
+    for k, pyramid in enumerate(pyramids):
+        base, apex = pyramid.points[:-1], pyramid.points[-1]
+        assert np.all(base[:, 2] == 0.0)  # exactly, whatever the rounding of the corners
+        assert np.allclose(pyramid.rotation.T @ pyramid.rotation, np.eye(3), atol=1e-12)
+        assert np.linalg.det(pyramid.rotation) == pytest.approx(1.0)
+        assert np.allclose(pyramid.rotation[:, 2], body.normals[k], atol=1e-12)
+        points = pyramid.body_points()
+        assert np.allclose(points[-1], 0.0, atol=1e-12)  # the apex is the centre of mass
+        assert np.allclose(points[:-1] @ body.normals[k], body.heights[k], atol=1e-9)
+        assert apex[2] == pytest.approx(-body.heights[k])
+        volume += ConvexHull(pyramid.points).volume
+        assert np.allclose(points[:-1], body.vertices[body.faces[k]], atol=1e-9)
+    assert volume == pytest.approx(ConvexHull(body.vertices).volume, rel=1e-9)
+
+
+def test_the_engine_folds_kites_and_not_triangles():
+    """The engine rounds a hull's corners: a trapezohedron's kites fold; triangles and a cube's squares do not."""
+    from diefab.physics.shapes import folded_faces
+    from diefab.physics.world import import_pybullet
+
+    for name, folded in (("uniform-5", True), ("2d6", False), ("d6", False)):
+        d = load_design(name)
+        faces = folded_faces(import_pybullet(), die_body(d.polyhedron, d.mass_properties()))
+        assert faces.all() == faces.any() == folded, name
+
+
+def test_a_fair_die_of_shallow_faces_lands_on_each_alike():
+    """The 26-face trapezohedron's kites are shallow: a hull whose corners the engine rounds folds them unevenly."""
+    d = fair_die(26)
+    result = simulate(d, 1500, seed=5, workers=2)
+    counts = result.face_counts
+    assert result.landed >= 1400
+    expected = counts.sum() / len(counts)
+    stat = float(((counts - expected) ** 2 / expected).sum())
+    assert stat < chi2.ppf(0.999, len(counts) - 1), counts.tolist()
