@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.spatial import ConvexHull
 from scipy.stats import chi2
 
 from diefab.dice.design import Design, load_design
-from diefab.physics.shapes import face_pyramids
+from diefab.physics.shapes import flat_parts
 from diefab.physics.simulate import simulate
 from diefab.physics.world import die_body
 from diefab.search.symmetric import fair_shapes
@@ -22,26 +21,32 @@ def fair_die(faces: int) -> Design:
     )
 
 
-@pytest.mark.parametrize("name", ["d6", "d20", "fudge-gem", "3df"])
-def test_pyramids_are_flat_faced_and_fill_the_die(name):
+@pytest.mark.parametrize("name", ["d6", "d20", "fudge-gem", "3df", "uniform-7", "3d6"])
+def test_flat_parts_carry_each_face_once_flat_and_lie_in_the_die(name):
     d = load_design(name)
     body = die_body(d.polyhedron, d.mass_properties())
-    pyramids = face_pyramids(body.vertices, body.normals, body.faces)
-    assert len(pyramids) == len(body.normals)
-    volume = 0.0
-    for k, pyramid in enumerate(pyramids):
-        base, apex = pyramid.points[:-1], pyramid.points[-1]
-        assert np.all(base[:, 2] == 0.0)  # exactly, whatever the rounding of the corners
-        assert np.allclose(pyramid.rotation.T @ pyramid.rotation, np.eye(3), atol=1e-12)
-        assert np.linalg.det(pyramid.rotation) == pytest.approx(1.0)
-        assert np.allclose(pyramid.rotation[:, 2], body.normals[k], atol=1e-12)
-        points = pyramid.body_points()
-        assert np.allclose(points[-1], 0.0, atol=1e-12)  # the apex is the centre of mass
-        assert np.allclose(points[:-1] @ body.normals[k], body.heights[k], atol=1e-9)
-        assert apex[2] == pytest.approx(-body.heights[k])
-        volume += ConvexHull(pyramid.points).volume
-        assert np.allclose(points[:-1], body.vertices[body.faces[k]], atol=1e-9)
-    assert volume == pytest.approx(ConvexHull(body.vertices).volume, rel=1e-9)
+    parts = flat_parts(body.vertices, body.normals, body.faces)
+    carried = sorted(f for q in parts for f in q.faces)
+    assert carried == list(range(len(body.faces)))
+    for q in parts:
+        assert np.allclose(q.rotation.T @ q.rotation, np.eye(3), atol=1e-12)
+        assert np.linalg.det(q.rotation) == pytest.approx(1.0)
+        assert np.allclose(q.rotation[:, 2], body.normals[q.faces[0]], atol=1e-12)
+        points = q.body_points()
+        # inside the die (its faces' half-spaces)
+        assert np.all(points @ body.normals.T <= body.heights + 1e-9)
+        start = 0
+        for f in q.faces:
+            k = len(body.faces[f])
+            z = q.points[start : start + k, 2]
+            assert np.all(z == z[0])  # exactly one plane, whatever the rounding of the corners
+            assert np.allclose(points[start : start + k], body.vertices[body.faces[f]], atol=1e-9)
+            start += k
+        assert q.points[0, 2] == 0.0
+        if len(q.faces) == 2:
+            assert body.normals[q.faces[0]] @ body.normals[q.faces[1]] == pytest.approx(-1.0)
+        else:
+            assert np.allclose(points[-1], 0.0, atol=1e-12)  # the apex is the centre of mass
 
 
 def test_the_engine_folds_kites_and_not_triangles():

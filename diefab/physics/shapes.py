@@ -1,4 +1,4 @@
-"""The die as the physics engine holds it: one hull, or one pyramid per face when the hull would fold its faces.
+"""The die as the physics engine holds it: one hull, or flat-faced parts where the hull would fold a face.
 
 Bullet rounds the corners of a convex hull to a grid of 1/10216 of the
 hull's bounding box on each axis (``btConvexHullComputer``, which every
@@ -13,31 +13,33 @@ alike land unevenly (a fair 26-face trapezohedron's least folded kites
 landed about twice as often as its most folded ones).
 
 :func:`folded_faces` measures the folds on the hull the engine made.  When
-there are any, the die is given as a compound of pyramids, one per face:
-the face is the pyramid's base and the centre of mass its apex (inside a
-convex die, so the pyramids fill it).  Each pyramid is given in a frame
-whose plane z = 0 is its face, so the rounding, which moves every base
-corner by the same amount along z, keeps the face flat, and only moves its
-corners within the face's plane by at most 1/10216 of the face's size.  A
-face that is itself flat only within a tolerance (a printed die's mesh) is
-made flat there too: its corners move onto the plane through their mean.
-The compound costs the engine more per step (two to four times on the dice
-measured), so a die whose hull keeps every face flat stays one hull.
+a face the die can rest on folds, the die is given as a compound of convex
+parts (:func:`flat_parts`), each in a frame where the faces it carries are
+planes of constant z: the rounding moves all the corners of such a face by
+the same amount along z, so it stays flat, and only moves them within its
+plane, by at most 1/10216 of the part's size.  Two opposite faces share a
+part (the hull of their corners); another face's part is its pyramid to the
+centre of mass.  Faces the die cannot rest on are left to the hull, shrunk
+towards the centre of mass by :data:`INSET` so that its rounding never
+lifts it past a flat face.  A face flat only within a tolerance (a printed
+die's mesh) is made flat too: its corners move onto the plane through their
+mean.  The compound costs the engine more per step, so a die whose hull
+keeps every resting face flat stays one hull.
 
 Examples
 --------
-The cube's six pyramids have square bases on z = 0 and their apex at the
-centre, a half-width below:
+A cube's opposite faces pair up, three parts, each a box with two faces on
+planes of constant z:
 
 >>> from itertools import product
 >>> import numpy as np
 >>> from diefab.geometry.polyhedron import Polyhedron
 >>> cube = Polyhedron.from_points(list(product((-1.0, 1.0), repeat=3)))
->>> pyramids = face_pyramids(cube.vertices, cube.normals, cube.faces)
->>> len(pyramids), {len(p.points) for p in pyramids}
-(6, {5})
->>> float(np.abs(pyramids[0].points[:4, 2]).max()), float(pyramids[0].points[4, 2])
-(0.0, -1.0)
+>>> parts = flat_parts(cube.vertices, cube.normals, cube.faces)
+>>> len(parts), [len(q.faces) for q in parts]
+(3, [2, 2, 2])
+>>> sorted(set(np.round(parts[0].points[:, 2], 12).tolist()))
+[-2.0, 0.0]
 """
 
 from __future__ import annotations
@@ -48,34 +50,42 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["FacePyramid", "engine_shape", "face_pyramids", "folded_faces"]
+__all__ = ["FlatPart", "engine_shape", "flat_parts", "folded_faces"]
 
+#: The rest of a die whose resting faces are held flat is its hull shrunk by this fraction towards the centre of mass.
+INSET = 2e-3
+#: Two faces whose unit normals' dot product is below this minus 1 are opposite.
+_OPPOSITE = 1e-9
 #: A face whose corners leave their best-fit plane by more than this (units of the die's radius) is folded.
 FOLD = 1e-9
 
 
 @dataclass(frozen=True, eq=False)
-class FacePyramid:
-    """One face's pyramid in the face's own frame.
+class FlatPart:
+    """A convex part of a die, given in a frame where the die's faces it carries are planes z = constant.
 
     Attributes
     ----------
-    points : (k + 1, 3) float
-        The face's ``k`` corners (z exactly 0) and then the apex (the
-        centre of mass), in the face's frame.
+    points : (k, 3) float
+        The part's corners in its frame: the corners of its faces (the
+        first face's at z exactly 0, an opposite face's at one z) and, for
+        a single face, the centre of mass.
     position : (3,) float
-        The frame's origin in the body frame: the mean of the face's corners.
+        The frame's origin in the body frame: the mean of the first face's corners.
     rotation : (3, 3) float
         Columns are the frame's axes in the body frame; the third is the
-        face's outward normal.
+        first face's outward normal.
+    faces : tuple of int
+        The die's faces the part carries: one, or two opposite ones.
     """
 
     points: np.ndarray
     position: np.ndarray
     rotation: np.ndarray
+    faces: tuple[int, ...]
 
     def body_points(self) -> np.ndarray:
-        """(k + 1, 3) float: the points in the body frame."""
+        """(k, 3) float: the points in the body frame."""
         return self.points @ self.rotation.T + self.position
 
 
@@ -87,8 +97,14 @@ def _frame(normal: np.ndarray) -> np.ndarray:
     return np.column_stack([u, np.cross(normal, u), normal])
 
 
-def face_pyramids(vertices: np.ndarray, normals: np.ndarray, faces: Sequence[Sequence[int]]) -> list[FacePyramid]:
-    """The pyramid over each face of the convex die `vertices`, apex at the origin (its centre of mass).
+def flat_parts(
+    vertices: np.ndarray, normals: np.ndarray, faces: Sequence[Sequence[int]], keep: np.ndarray | None = None
+) -> list[FlatPart]:
+    """Convex parts of the die `vertices` that carry each face of mask `keep` flat in their own frame.
+
+    Two opposite faces (antiparallel normals) share a part, the hull of
+    their corners, which lies inside the die; any other face's part is its
+    pyramid to the centre of mass (the origin, inside a convex die).
 
     Parameters
     ----------
@@ -98,17 +114,32 @@ def face_pyramids(vertices: np.ndarray, normals: np.ndarray, faces: Sequence[Seq
         Outward unit face normals, body frame.
     faces : sequence of m index sequences
         Each face's corners, indices into `vertices`.
+    keep : (m,) bool, optional
+        The faces to carry (default: all).
     """
     vertices = np.asarray(vertices, dtype=float)
+    normals = np.asarray(normals, dtype=float)
+    todo = [int(k) for k in np.flatnonzero(np.ones(len(normals), bool) if keep is None else keep)]
+    left = set(todo)
     out = []
-    for ring, normal in zip(faces, np.asarray(normals, dtype=float)):
-        corners = vertices[np.asarray(ring)]
+    for f in todo:
+        if f not in left:
+            continue
+        left.discard(f)
+        opposite = [g for g in left if normals[f] @ normals[g] < _OPPOSITE - 1.0]
+        corners = vertices[np.asarray(faces[f])]
         center = corners.mean(axis=0)
-        rotation = _frame(normal)
+        rotation = _frame(normals[f])
         local = (corners - center) @ rotation
         local[:, 2] = 0.0
-        apex = -center @ rotation
-        out.append(FacePyramid(np.vstack([local, apex]), center, rotation))
+        if opposite:
+            g = opposite[0]
+            left.discard(g)
+            other = (vertices[np.asarray(faces[g])] - center) @ rotation
+            other[:, 2] = other[:, 2].mean()
+            out.append(FlatPart(np.vstack([local, other]), center, rotation, (f, g)))
+        else:
+            out.append(FlatPart(np.vstack([local, -center @ rotation]), center, rotation, (f,)))
     return out
 
 
@@ -144,26 +175,32 @@ def _write_obj(path: Path, points: np.ndarray) -> None:
     path.write_text(text)
 
 
-def engine_shape(p, body, client: int, directory: str | Path) -> int:
-    """A pybullet collision shape of the convex die `body`: the compound of its :func:`face_pyramids`.
+def engine_shape(p, body, faces: np.ndarray, client: int, directory: str | Path) -> int:
+    """A pybullet collision shape of the convex die `body` that holds the faces of mask `faces` flat.
 
-    pybullet builds a compound of meshes only from files: each pyramid is
-    written to a Wavefront OBJ file in `directory`, which must stay until
-    the bodies of the shape have been created (the engine reads the files
-    again then).
+    The compound of those faces' :func:`flat_parts` and, when they are
+    not all of the die's faces, the die's hull shrunk towards its centre of
+    mass by :data:`INSET` (so that the engine's rounding never lifts it
+    past a flat face).  pybullet builds a compound of meshes only from
+    files: each part is written to a Wavefront OBJ file in `directory`,
+    which must stay until the bodies of the shape have been created (the
+    engine reads the files again then).
     """
     from scipy.spatial.transform import Rotation
 
-    pyramids = face_pyramids(body.vertices, body.normals, body.faces)
+    flat = flat_parts(body.vertices, body.normals, body.faces, faces)
+    parts = [(q.points, q.position, Rotation.from_matrix(q.rotation).as_quat()) for q in flat]
+    if not np.all(faces):
+        parts.append(((1.0 - INSET) * body.vertices, np.zeros(3), np.array([0.0, 0.0, 0.0, 1.0])))
     names = []
-    for k, pyramid in enumerate(pyramids):
-        path = Path(directory) / f"face{k}.obj"
-        _write_obj(path, pyramid.points)
+    for k, (points, _, _) in enumerate(parts):
+        path = Path(directory) / f"part{k}.obj"
+        _write_obj(path, points)
         names.append(str(path))
     return p.createCollisionShapeArray(
-        shapeTypes=[p.GEOM_MESH] * len(pyramids),
+        shapeTypes=[p.GEOM_MESH] * len(parts),
         fileNames=names,
-        collisionFramePositions=[q.position.tolist() for q in pyramids],
-        collisionFrameOrientations=[Rotation.from_matrix(q.rotation).as_quat().tolist() for q in pyramids],
+        collisionFramePositions=[position.tolist() for _, position, _ in parts],
+        collisionFrameOrientations=[quaternion.tolist() for _, _, quaternion in parts],
         physicsClientId=client,
     )

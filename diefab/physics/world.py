@@ -356,8 +356,9 @@ class World:
         p.setCollisionFilterGroupMask(self.ground, -1, 1, 2, physicsClientId=cid)
         with tempfile.TemporaryDirectory(prefix="diefab-die-") as files:  # read again as each body is made
             # a compound's parts keep the engine's margin: a die with another one (rounded) stays one hull
-            if margin == FACE_MARGIN and folded_faces(p, self.body).any():
-                shape = engine_shape(p, self.body, cid, files)
+            flat = folded_faces(p, self.body) & self.body.basins.resting if margin == FACE_MARGIN else np.zeros(1, bool)
+            if flat.any():
+                shape = engine_shape(p, self.body, flat, cid, files)
             else:
                 shape = p.createCollisionShape(p.GEOM_MESH, vertices=self.body.vertices.tolist(), physicsClientId=cid)
             self.dice = [self._add_die(shape, k, margin) for k in range(slots)]
