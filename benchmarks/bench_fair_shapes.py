@@ -1,21 +1,20 @@
-"""Do the faces a fair die's symmetry makes alike land alike in the simulator?  Against a baseline checkout.
+"""Do the faces a fair die's symmetry makes alike land alike in the simulator?  One hull against flat faces.
 
     nice -n 10 python benchmarks/bench_fair_shapes.py
-    git worktree add --detach /tmp/diefab-base REV     # the baseline, e.g. the commit before a change
-    nice -n 10 python benchmarks/bench_fair_shapes.py --baseline /tmp/diefab-base --faces 18 22 26
+    nice -n 10 python benchmarks/bench_fair_shapes.py --faces 18 22 26
 
 Every fair die diefab offers for a face count (``fair_shapes(m)``: the
 steadiest bipyramid or trapezohedron, m = 6 ... 60) and the d6, d8 and d20
 templates are dropped ``--sims`` times on seed ``--seed`` with ``python -m
-diefab validate DIE --json`` in this checkout (and in the baseline's, in the
-same run), each face its own value.  Such a die lands on every face alike
+diefab validate DIE --json``, each face its own value: as the engine holds
+it by default (one hull) and with ``--flat-faces``, in the same run.  Such a die lands on every face alike
 under any physics, so the counts are tested against the uniform
 distribution: chi-squared on faces - 1 degrees of freedom and its p-value,
 the fewest and most landings on one face, and the drops per second.  The
-``folds`` column says whether the engine folds the faces of the die's hull
-(``diefab.physics.shapes``).  Results go to
-``benchmarks/results/fair_shapes.json`` (this checkout's) as each die
-finishes.
+``folds`` column says whether the engine's hull folds a face the die rests
+on (``diefab.physics.shapes``; without folds both runs are the same
+simulation).  Results go to ``benchmarks/results/fair_shapes.json`` as each
+die finishes.
 """
 
 from __future__ import annotations
@@ -54,10 +53,10 @@ def dice(faces: list[int] | None):
     return out
 
 
-def drop(checkout: Path, toml: Path, sims: int, seed: int, workers: int) -> dict:
-    env = {**os.environ, "PYTHONPATH": str(checkout)}
+def drop(toml: Path, sims: int, seed: int, workers: int, *options: str) -> dict:
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
     done = subprocess.run([sys.executable, "-m", "diefab", "validate", str(toml), "--sims", str(sims), "--seed",
-                           str(seed), "--workers", str(workers), "--json"], cwd=checkout, env=env,
+                           str(seed), "--workers", str(workers), "--json", *options], cwd=ROOT, env=env,
                           capture_output=True, text=True)  # fmt: skip
     if done.returncode != 0:
         return {"error": (done.stderr.strip().splitlines() or ["?"])[-1]}
@@ -87,7 +86,6 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=7)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--faces", type=int, nargs="*", default=None, help="Only dice of these face counts.")
-    parser.add_argument("--baseline", type=Path, default=None, help="Checkout of the code to compare with.")
     args = parser.parse_args()
     results = json.loads(RESULTS.read_text()) if RESULTS.is_file() else {}
     print(f"{args.sims} drops each, seed {args.seed}, {args.workers} workers, load {os.getloadavg()[0]:.1f}")
@@ -96,18 +94,20 @@ def main() -> None:
             toml = Path(tmp) / f"{d.name}.toml"
             toml.write_text(design_to_toml(d))
             poly = d.polyhedron
-            folds = bool(folded_faces(import_pybullet(), die_body(poly, d.mass_properties())).any())
+            body = die_body(poly, d.mass_properties())
+            folds = bool((folded_faces(import_pybullet(), body) & body.basins.resting).any())
             tipping = tipping_angle(poly, poly.centroid)
             print(f"{label:18s} tipping {tipping:5.1f} deg, folds {'yes' if folds else 'no'}", flush=True)
-            new = drop(ROOT, toml, args.sims, args.seed, args.workers)
-            print(f"  this checkout: {describe(new)}", flush=True)
-            if args.baseline is not None:
-                old = drop(args.baseline, toml, args.sims, args.seed, args.workers)
-                print(f"  baseline:      {describe(old)}", flush=True)
-                if "error" not in old and "error" not in new:
-                    print(f"  drops/s this/baseline {new['drops_per_second'] / old['drops_per_second']:.2f}",
-                          flush=True)  # fmt: skip
-            results[label] = {**new, "sims": args.sims, "seed": args.seed, "folds": folds}
+            hull = drop(toml, args.sims, args.seed, args.workers)
+            print(f"  one hull:    {describe(hull)}", flush=True)
+            row = {"sims": args.sims, "seed": args.seed, "folds": folds, "tipping": tipping, "hull": hull}
+            if folds:
+                flat = drop(toml, args.sims, args.seed, args.workers, "--flat-faces")
+                print(f"  flat faces:  {describe(flat)}", flush=True)
+                if "error" not in flat and "error" not in hull:
+                    print(f"  drops/s flat/hull {flat['drops_per_second'] / hull['drops_per_second']:.2f}", flush=True)
+                row["flat"] = flat
+            results[label] = row
             RESULTS.write_text(json.dumps(results, indent=1) + "\n")
 
 

@@ -54,7 +54,7 @@ UNSETTLED = -2
 
 #: Raised whenever a change to this module can change a drop's outcome at given settings and seed
 #: (the fast model's benchmark keys its cached counts by it).
-OUTCOME_VERSION = 3
+OUTCOME_VERSION = 2
 #: Steps between two settle checks of the fast path (it never changes a trajectory).
 CHECK_EVERY = 32
 #: Die bodies stepped together in one world.
@@ -356,7 +356,9 @@ class World:
         p.setCollisionFilterGroupMask(self.ground, -1, 1, 2, physicsClientId=cid)
         with tempfile.TemporaryDirectory(prefix="diefab-die-") as files:  # read again as each body is made
             # a compound's parts keep the engine's margin: a die with another one (rounded) stays one hull
-            flat = folded_faces(p, self.body) & self.body.basins.resting if margin == FACE_MARGIN else np.zeros(1, bool)
+            flat = np.zeros(1, bool)
+            if s.flat_faces and margin == FACE_MARGIN:
+                flat = folded_faces(p, self.body) & self.body.basins.resting
             if flat.any():
                 shape = engine_shape(p, self.body, flat, cid, files)
             else:
