@@ -97,7 +97,7 @@ def test_the_verdict_names_faces_the_engine_folds():
     assert folded_resting_faces(load_design("2d6"), PhysicsSettings()) == 0  # triangles
     check = {"tvd": 0.025, "n": 30_000, "expected_tvd": 0.005, "folded_faces": 22}
     verdict = judge(parse_target("uniform:11"), check, 0.02, method="fair")
-    assert not verdict.met and "22 of the faces" in verdict.why and "flat_faces" in verdict.why
+    assert not verdict.met and "22 of the faces" in verdict.why and "--flat-faces" in verdict.why
     assert "folded" not in judge(parse_target("uniform:11"), {**check, "folded_faces": 0}, 0.02, method="fair").why
 
 

@@ -210,7 +210,7 @@ def judge(
     if folded:
         reasons.append(f"the engine holds {folded} of the faces the die rests on folded (it rounds a hull's corners "
                        "to 1/10216 of its size), which makes faces alike land unevenly on a die of shallow faces: "
-                       "a physics table with flat_faces = true (--physics) simulates them flat")  # fmt: skip
+                       "design --flat-faces simulates them flat")  # fmt: skip
     if not reasons or (nearest is not None and distance > float(nearest.tvd) + tolerance):
         reasons.append("the closing check's drops disagree with the search's")
     why = f"validated TVD {distance:.4f} is above the tolerance {tolerance:g}: " + "; ".join(reasons)
