@@ -86,6 +86,21 @@ def test_the_verdict_names_the_limit_and_passes_a_die_within_tolerance():
     assert not noisy.met and "--validate-sims" in noisy.why
 
 
+def test_the_verdict_names_faces_the_engine_folds():
+    from diefab.dice.design import load_design
+    from diefab.physics.simulate import PhysicsSettings
+    from diefab.search.verdict import folded_resting_faces
+
+    kites = load_design("uniform-5")
+    assert folded_resting_faces(kites, PhysicsSettings()) == 10
+    assert folded_resting_faces(kites, PhysicsSettings(flat_faces=True)) == 0
+    assert folded_resting_faces(load_design("2d6"), PhysicsSettings()) == 0  # triangles
+    check = {"tvd": 0.025, "n": 30_000, "expected_tvd": 0.005, "folded_faces": 22}
+    verdict = judge(parse_target("uniform:11"), check, 0.02, method="fair")
+    assert not verdict.met and "22 of the faces" in verdict.why and "--flat-faces" in verdict.why
+    assert "folded" not in judge(parse_target("uniform:11"), {**check, "folded_faces": 0}, 0.02, method="fair").why
+
+
 def test_the_fast_model_is_not_trusted_where_it_differs_from_the_drops():
     from diefab.dice.design import load_design
     from diefab.search.verdict import FAST_TRUST, fast_agreement

@@ -64,6 +64,12 @@ FLAT_DEG = (12.0, 24.0)
 REPROJECTION = (0.08, 0.16)
 
 
+#: Pixels per cell at which a candidate marker's bits are read.  A marker seen obliquely is sampled finer than
+#: OpenCV's default of 4 and is then decoded: markers on the steep faces beside the top are found, so that a
+#: pose rests on several markers instead of one (whose two planar solutions may rest on different faces).
+PIXELS_PER_CELL = 8
+
+
 class MarkerError(DiefabError, ValueError):
     """A design carries no markers, or the markers seen belong to another die or dictionary."""
 
@@ -143,6 +149,7 @@ class MarkerDetector:
         params.cornerRefinementMethod = cv2.aruco.CORNER_REFINE_CONTOUR
         params.minMarkerPerimeterRate = 0.02
         params.adaptiveThreshWinSizeMax = 33
+        params.perspectiveRemovePixelPerCell = PIXELS_PER_CELL
         self._cv2 = cv2
         self._detector = cv2.aruco.ArucoDetector(
             cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, layout.dictionary)), params
@@ -220,11 +227,11 @@ def solve_pose(
     """
     import cv2
 
-    known = [(i, layout.face_of(int(m))) for i, m in enumerate(ids)]
-    known = [(i, f) for i, f in known if f is not None]
+    row_of = {int(m): j for j, m in enumerate(layout.ids)}
+    known = [(i, row_of[int(m)]) for i, m in enumerate(ids) if int(m) in row_of]
     if not known:
         return None
-    rows = [int(np.flatnonzero(layout.faces == f)[0]) for _, f in known]
+    rows = [j for _, j in known]
     objects = layout.corners[rows] * mm_per_unit  # (n, 4, 3) mm
     images = corners[[i for i, _ in known]]
     normals = np.array([_marker_frame(o)[0][:, 2] for o in objects])
@@ -289,18 +296,18 @@ def _rotation_spread(objects, rotation, translation, camera, error: float) -> tu
     least :data:`CORNER_PX`); an uncalibrated lens adds :data:`LENS_DEG` to the standard error.  The
     covariance is that of the rotation's Rodrigues vector, lens not included.
 
-    With several markers the residual keeps many degrees of freedom and its RMS is close to the scatter
-    (the ramps of :func:`read_pose` are set on it).  One marker's four corners give eight coordinates to
-    six pose parameters: the pose absorbs most of the scatter (a small marker seen square-on tilts freely)
-    and the RMS residual is on average half of it, so it is doubled (``sqrt(8 / (8 - 6))``).
+    The pose's six parameters absorb part of the scatter: the RMS residual of m corner coordinates is on
+    average ``sqrt((m - 6) / m)`` of it, so it is divided by that.  One marker's four corners give eight
+    coordinates, and its residual is half the scatter (a small marker seen square-on tilts freely); two
+    markers' sixteen keep ``sqrt(10 / 16)`` of it, and many markers nearly all.
     """
     import cv2
 
     rvec = cv2.Rodrigues(rotation)[0]
     _, jacobian = cv2.projectPoints(objects, rvec, translation.reshape(3, 1), camera.matrix, camera.distortion)
     j = jacobian[:, :6]
-    if len(objects) == 4:
-        error *= math.sqrt(8 / (8 - 6))
+    m = 2 * len(objects)
+    error *= math.sqrt(m / (m - 6))  # unbiased: the residual's degrees of freedom, not its coordinates
     sigma = max(error, CORNER_PX)
     try:
         cov = sigma**2 * np.linalg.inv(j.T @ j)

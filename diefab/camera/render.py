@@ -191,20 +191,20 @@ def render(
     centres_cam = (poly.face_centroids * s) @ r_cam.T + t_cam
     facing = np.einsum("ij,ij->i", normals @ view.rotation.T, centres_cam) < 0
     order = [f for f in np.argsort(-centres_cam[:, 2]) if facing[f]]
-    rows = {int(f): j for j, f in enumerate(layout.faces)}
+    rows: dict[int, list[int]] = {}
+    for j, f in enumerate(layout.faces):
+        rows.setdefault(int(f), []).append(j)
     albedo = 225.0
     for f in order:
         shade = albedo * (0.35 + 0.65 * max(0.0, float(normals[f] @ light)))
         pts, _ = project(poly.vertices[poly.faces[f]] * s)
         cv2.fillPoly(image, [np.round(pts * 16).astype(np.int32)], float(shade), cv2.LINE_AA, shift=4)
-        if f not in rows:
-            continue
-        j = rows[f]
-        tex = textures.get(j)
-        if tex is None:
-            tex = textures[j] = _marker_texture(layout, j)
-        quad, _ = project(layout.corners[j] * s)
-        _paste(image, tex * shade, quad)
+        for j in rows.get(int(f), ()):
+            tex = textures.get(j)
+            if tex is None:
+                tex = textures[j] = _marker_texture(layout, j)
+            quad, _ = project(layout.corners[j] * s)
+            _paste(image, tex * shade, quad)
     image = _degrade(image, conditions, rng)
     return image
 

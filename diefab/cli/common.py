@@ -303,6 +303,9 @@ def physics_options(func):
     ]
     for flag, kind, text in reversed(options):
         func = click.option(flag, type=kind, default=None, help=text)(func)
+    func = click.option("--flat-faces/--no-flat-faces", default=None,
+                        help="Hold the faces the die rests on flat in the engine, whose one hull folds some "
+                        "(slower; see the validation docs) (default: the one hull).")(func)  # fmt: skip
     func = click.option("--angular-velocity", type=(float, float), default=None, metavar="MIN MAX",
                         help="Range of the initial spin, rad/s (default 0 10).")(func)  # fmt: skip
     func = click.option("--linear-velocity", type=(float, float), default=None, metavar="MIN MAX",

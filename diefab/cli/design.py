@@ -73,6 +73,9 @@ def _slug(text: str) -> str:
 @click.option("--workers", type=click.IntRange(1, 256), default=None, help="Worker processes (default all cores).")
 @click.option("--scheduler", default=None, metavar="ADDRESS", help="Run the drops on this Dask scheduler.")
 @physics_file_option
+@click.option("--flat-faces", is_flag=True,
+              help="Simulate the faces the die rests on flat where the engine's one hull folds them (slower; "
+              "kept in the design's [physics] table).")  # fmt: skip
 @click.option("--robust", is_flag=True,
               help="Refine and check against every standard throw and table (the shipped profiles soft-tray, "
               "wooden-table, hard-tray, low-spin, high-spin; each over --physics), judged by the worst.")  # fmt: skip
@@ -81,8 +84,8 @@ def _slug(text: str) -> str:
 @json_option
 @click.pass_context
 def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance, name, seed, size_mm, min_margin,
-           validate_sims, workers, scheduler, physics_profile, robust, out_dir, report_file, as_json, fill_kind,
-           **fill_settings) -> None:  # fmt: skip
+           validate_sims, workers, scheduler, physics_profile, flat_faces, robust, out_dir, report_file, as_json,
+           fill_kind, **fill_settings) -> None:  # fmt: skip
     """Design a die that rolls like TARGET (2d6, 3dF, binomial:4, uniform:3, 1:3,2:3,...).
 
     Picks a family and face count that can carry the target's values,
@@ -132,6 +135,8 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
     if scheduler is not None:
         refuse_options(ctx, ["workers"], "does not apply with --scheduler (the cluster's workers run the drops)")
     physics = {} if physics_profile is None else load_profile(physics_profile).as_dict()
+    if flat_faces:
+        physics = PhysicsSettings.from_mapping(physics, flat_faces=True).as_dict()
     throws = [load_profile(p, base=physics).as_dict() for p in STANDARD] if robust else []
     family = None if family_name == "auto" else family_name
     ensure_dir(out_dir)
@@ -154,6 +159,7 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
         f"({found.model} model, seed {seed})",
     )
     how = (f" --physics {physics_profile}" if physics_profile else "") + (" --robust" if robust else "")
+    how += " --flat-faces" if flat_faces else ""
     how += (f" --family {family_name}" if family_name != "auto" else "") + (f" --faces {faces}" if faces else "")
     path = atomic_write(
         output_path(out_dir, d.name, ".toml"),

@@ -39,7 +39,7 @@ SIZE_HELP = (
               help="Mark on a label that reads as another label of the die upside down (6 and 9).")  # fmt: skip
 @click.option("--pips", is_flag=True, help="Draw values 1 to 9 as pips.")
 @click.option("--markers", "with_markers", is_flag=True,
-              help="Print each face's ArUco marker beside its value, for diefab read.")  # fmt: skip
+              help="Print each face's ArUco markers beside its value, for diefab read.")  # fmt: skip
 @fill_options("paper", kind=False)
 @out_option
 @json_option
@@ -80,11 +80,12 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
 
     n_pages = max(n.n_pages for n in pack_copies(the_net, copies))
     if as_json:
+        from diefab.fabricate.markers import marker_json
+
         emit_json({"files": [str(p) for p in written], "template": template, "size_mm": size,
                    "pieces": the_net.n_pieces, "pages": n_pages, "tabs": len(the_net.tabs),
                    "tab_offset_mm": the_net.search.get("tab_offset_mm", 0.0), **balance.as_json(),
-                   **({"markers": {m.face: {"id": m.marker_id, "side_mm": m.side_mm, "cell_mm": m.cell_mm}
-                                   for m in placed}} if placed else {})})  # fmt: skip
+                   **({"markers": marker_json(placed)} if placed else {})})  # fmt: skip
         return
     if note:
         click.echo(note)

@@ -54,7 +54,7 @@ from diefab.core.files import check_outputs, ensure_dir, output_path, write_file
     "--markers",
     "with_markers",
     is_flag=True,
-    help="Inlay each face's ArUco marker beside its value, flush (3MF: second part), for diefab read.",
+    help="Inlay each face's ArUco markers beside its value, flush (3MF: second part), for diefab read.",
 )
 @click.option(
     "--inlay",

@@ -30,7 +30,7 @@ __all__ = ["MIN_TIME_STEP", "OPT_IN", "PhysicsSettings"]
 #: Finest simulation step, seconds (10 kHz; pybullet's default is 240 Hz).
 MIN_TIME_STEP = 1e-4
 #: Settings added after the others, with the value that turns them off (the rigid simulation).
-OPT_IN = {"capture_energy": 0.0, "table_softness": 0.0, "table_damping": 0.0, "edge_radius": 0.0}
+OPT_IN = {"capture_energy": 0.0, "table_softness": 0.0, "table_damping": 0.0, "edge_radius": 0.0, "flat_faces": False}
 
 
 def _check(name: str, value, ok: bool, expected: str) -> None:
@@ -120,6 +120,17 @@ class PhysicsSettings:
         stay where they are), in units of the die's radius L.  A face
         narrower than the rounding vanishes, and the die cannot rest on it.
         0 (the default) is the sharp hull.  In [0, 0.2].
+    flat_faces : bool
+        Hold every face the die can rest on flat in the engine.  Bullet
+        rounds a hull's corners to a grid of 1/10216 of its size, which
+        folds a face of four or more corners that does not lie across an
+        axis (a trapezohedron's kites, the icosahedral die's pentagons); on
+        a die of shallow faces the folds make faces its symmetry makes alike
+        land unevenly.  True gives the engine such a die as flat-faced parts
+        (:mod:`diefab.physics.shapes`), two to four times slower per drop;
+        a die whose hull folds none of its resting faces, or whose margin is
+        not the engine's 0.001, is simulated as one hull either way.  False
+        (the default) is the one hull.
     time_limit : float
         A die still moving after this many seconds is unsettled.
     face_tolerance : float
@@ -148,6 +159,7 @@ class PhysicsSettings:
     table_softness: float = 0.0
     table_damping: float = 0.0
     edge_radius: float = 0.0
+    flat_faces: bool = False
     time_limit: float = 20.0
     face_tolerance: float = 3.0
 
@@ -168,6 +180,9 @@ class PhysicsSettings:
                 ok = isinstance(value, (int, np.integer)) and not isinstance(value, bool) and 1 <= value <= 1000
                 _check(f.name, value, ok, "an integer in [1, 1000]")
                 object.__setattr__(self, f.name, int(value))
+            elif f.name == "flat_faces":
+                _check(f.name, value, isinstance(value, (bool, np.bool_)), "true or false")
+                object.__setattr__(self, f.name, bool(value))
             elif not isinstance(value, tuple):
                 _check(f.name, value, _finite(value), "a finite number")
                 object.__setattr__(self, f.name, float(value))

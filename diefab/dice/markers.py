@@ -1,12 +1,16 @@
 """Fiducial markers on a die's faces: which marker goes on which face, and where.
 
 Every face large enough carries one ArUco marker (OpenCV's ``cv2.aruco``
-dictionaries): face k carries marker id k of the smallest dictionary that
-holds one id per face (:data:`DICTIONARIES`), so the layout follows from the
-design alone.  The marker is a square in the face's label frame (x along the
-baseline, y up, as the value label reads): as large as the face allows inside
-a margin, and where the face also carries a value label, a share of that size
-pushed to the side that leaves the label the most room.
+dictionaries), and a face so large that one marker toward each of its corners
+is still large (:data:`MULTI_SIDE_FRACTION`: a cube's) carries one there, so
+that a finger over part of a die that shows only that face leaves a marker in
+view.  The markers are numbered 0, 1, ... face by face in the smallest
+dictionary that holds them all (:data:`DICTIONARIES`), so the layout follows
+from the design alone.  A marker is a square in the face's label frame (x
+along the baseline, y up, as the value label reads): as large as the face
+allows inside a margin, and where the face also carries a value label, a share
+of that size pushed to the side that leaves the label the most room (or, with
+a marker toward each corner, the middle of the face).
 
 The layout is geometry only (model units); the sticker sheet, the net, the
 solid and the camera all read the same squares, so a printed die and the
@@ -16,8 +20,8 @@ Examples
 --------
 >>> from diefab.dice.design import load_design
 >>> layout = marker_layout(load_design("d6"))
->>> layout.dictionary, layout.ids.tolist()
-('DICT_4X4_50', [0, 1, 2, 3, 4, 5])
+>>> layout.dictionary, len(layout.ids), layout.faces[:8].tolist()
+('DICT_4X4_50', 24, [0, 0, 0, 0, 1, 1, 1, 1])
 >>> bool(np.allclose(np.linalg.norm(layout.corners[0, 0] - layout.corners[0, 1]), layout.sides[0]))
 True
 """
@@ -62,6 +66,13 @@ LABEL_SHARE = 0.62
 LABEL_ROOM = 0.55
 #: A face whose marker would be smaller than this fraction of the die's reference size carries none.
 MIN_SIDE_FRACTION = 0.08
+#: A face carries one marker toward each of its corners, instead of one marker, when each of them is still at
+#: least this fraction of the die's reference size: a die that shows only its top face (a cube seen from above)
+#: is then still read with a finger over part of it.
+MULTI_SIDE_FRACTION = 0.18
+#: Room left for the value label in the middle of a face with a marker toward each corner, as a fraction of the
+#: face's inradius: the label is then centred and upright, and a little smaller than beside one marker.
+CORNERS_LABEL_ROOM = 0.45
 
 
 def dictionary_for(n_ids: int) -> str:
@@ -179,6 +190,56 @@ def _beside_label(region, center, side: float) -> tuple[float, np.ndarray] | Non
     return max(options, key=lambda o: o[0]) if options else None  # max keeps the first of equals
 
 
+def _at_corners(region, ring: np.ndarray, labelled: bool, inradius: float) -> tuple[float, list[np.ndarray]]:
+    """Side and centres of equal squares, one pushed toward each corner of the face `ring` ((m, 2), label frame).
+
+    As large as they fit in `region` apart from each other (by a gap of a tenth of their side) and, on a
+    labelled face, leaving the label a room of :data:`CORNERS_LABEL_ROOM` times the face's `inradius` between them.
+    (0, []) when no such squares fit.
+    """
+    import shapely
+    from shapely.ops import polylabel, unary_union
+
+    if region.is_empty or region.area <= 0:
+        return 0.0, []
+    if region.geom_type != "Polygon":
+        region = max(region.geoms, key=lambda g: g.area)
+    shapely.prepare(region)
+    p = polylabel(region, tolerance=1e-4 * np.sqrt(region.area))
+    center = np.array([p.x, p.y])
+    toward = [(q - center) / np.linalg.norm(q - center) for q in ring]
+
+    def fit(side: float) -> list[np.ndarray] | None:
+        centres = [_reach(region, center, side, d) for d in toward]
+        if any(c is None for c in centres):
+            return None
+        gap = 0.1 * side
+        boxes = [shapely.box(*(c - side / 2 - gap / 2), *(c + side / 2 + gap / 2)) for c in centres]
+        if any(a.intersects(b) for i, a in enumerate(boxes) for b in boxes[i + 1 :]):
+            return None
+        if labelled:
+            rest = region.difference(unary_union(boxes).buffer(gap / 2, join_style="mitre"))
+            if rest.geom_type != "Polygon":
+                rest = max(getattr(rest, "geoms", []), key=lambda g: g.area, default=None)
+            if (
+                rest is None
+                or rest.is_empty
+                or rest.exterior.distance(polylabel(rest, 1e-3 * side)) < (CORNERS_LABEL_ROOM * inradius)
+            ):
+                return None
+        return centres
+
+    lo, hi, best = 0.0, _largest_square(region, center), []
+    for _ in range(14):
+        mid = 0.5 * (lo + hi)
+        centres = fit(mid)
+        if centres is None:
+            hi = mid
+        else:
+            lo, best = mid, centres
+    return (lo, best) if best else (0.0, [])
+
+
 def _place(region, labelled: bool, inradius: float) -> tuple[float, np.ndarray]:
     """Side and centre of the marker in a face region (label-frame coordinates).
 
@@ -215,7 +276,7 @@ def _place(region, labelled: bool, inradius: float) -> tuple[float, np.ndarray]:
 
 
 def marker_layout(design: Design) -> MarkerLayout:
-    """The markers of `design`: one per face large enough, id = face index.
+    """The markers of `design`: one per face large enough (one toward each corner of a large face), ids 0, 1, ...
 
     Raises
     ------
@@ -236,7 +297,6 @@ def _layout_cached(design: Design) -> MarkerLayout:
     poly = design.polyhedron
     axis = design_axis(design)
     size = float(np.ptp(poly.vertices, axis=0).max())
-    name, _, bits = next(d for d in DICTIONARIES if d[0] == dictionary_for(len(poly.faces)))
     labelled = set(design.label_of)
     try:
         marks = [m for m in markings(poly, design.values, {n: str(v) for n, v in design.values.items()}) if m.at]
@@ -257,18 +317,26 @@ def _layout_cached(design: Design) -> MarkerLayout:
                 corner = flat[at].mean(axis=0)
                 zone = Polygon(corner + MARK_REACH * (flat - corner))
                 region = region.difference(zone)
-        side, c = _place(region, poly.names[k] in labelled or any(m.face == poly.names[k] for m in marks), inradius)
+        has_label = poly.names[k] in labelled or any(m.face == poly.names[k] for m in marks)
+        side, c = _place(region, has_label, inradius)
+        placed = [c]
+        if side >= 2 * MULTI_SIDE_FRACTION * size:  # room, perhaps, for one marker toward each corner
+            several, centres = _at_corners(region, flat, has_label, inradius)
+            if several >= MULTI_SIDE_FRACTION * size:
+                side, placed = several, centres
         if side < MIN_SIDE_FRACTION * size:
             continue
         h = side / 2
-        square = np.array([[-h, h], [h, h], [h, -h], [-h, -h]]) + c  # TL, TR, BR, BL in the label frame
-        faces.append(k)
-        corners.append(origin + square[:, :1] * u + square[:, 1:] * v)
-        sides.append(side)
+        for c in placed:
+            square = np.array([[-h, h], [h, h], [h, -h], [-h, -h]]) + c  # TL, TR, BR, BL in the label frame
+            faces.append(k)
+            corners.append(origin + square[:, :1] * u + square[:, 1:] * v)
+            sides.append(side)
     if not faces:
         raise DesignError(f"design {design.name!r} has no face large enough to carry a marker")
-    faces_arr = np.array(faces, dtype=int)
-    return MarkerLayout(name, faces_arr, faces_arr.copy(), np.array(corners), np.array(sides), bits)
+    name, _, bits = next(d for d in DICTIONARIES if d[0] == dictionary_for(len(faces)))
+    ids = np.arange(len(faces))
+    return MarkerLayout(name, np.array(faces, dtype=int), ids, np.array(corners), np.array(sides), bits)
 
 
 def marker_cells(dictionary: str, marker_id: int) -> np.ndarray:

@@ -1,8 +1,9 @@
 """The die's fiducial markers as made: printed on the paper net, inlaid in the printed solid.
 
 Both use the design's marker layout (:func:`~diefab.dice.markers.marker_layout`:
-face k carries marker id k of one ArUco dictionary, each square as large as
-its face allows beside the value), so a folded or printed die is read by
+each face carries one marker of one ArUco dictionary, or a large face one
+toward each corner, each square as large as its face allows beside the
+value), so a folded or printed die is read by
 ``diefab read`` exactly as a die with the sticker sheet is.
 
 * :func:`net_markers` maps each square onto its face of a paper net (page mm);
@@ -24,8 +25,8 @@ Examples
 >>> from diefab.fabricate.net import design_net
 >>> d6 = load_design("d6")
 >>> marks = net_markers(d6, design_net(d6))
->>> [m.marker_id for m in marks], round(marks[0].side_mm, 2), round(marks[0].cell_mm, 2)
-([0, 1, 2, 3, 4, 5], 8.73, 1.45)
+>>> len(marks), [m.face for m in marks][:5], round(marks[0].side_mm, 2), round(marks[0].cell_mm, 2)
+(24, ['f1', 'f1', 'f1', 'f1', 'f2'], 4.09, 0.68)
 """
 
 from __future__ import annotations
@@ -47,6 +48,7 @@ __all__ = [
     "NetMarker",
     "check_cells",
     "marked_body",
+    "marker_json",
     "marker_report",
     "marker_summary",
     "net_markers",
@@ -177,8 +179,19 @@ def solid_markers(
     labels = inlay_labels(poly, flat, design_axis(design), layout.faces, layout.corners * scale, cells,
                           depth_mm=depth_mm, names=names)  # fmt: skip
     # the black frame makes the dark cells' hull the whole square
-    keep_clear = {m.face: m.outline.convex_hull.buffer(QUIET_CELLS * m.stroke_mm, join_style="mitre") for m in labels}
+    keep_clear: dict[str, Any] = {}
+    for m in labels:
+        square = m.outline.convex_hull.buffer(QUIET_CELLS * m.stroke_mm, join_style="mitre")
+        keep_clear[m.face] = square.union(keep_clear[m.face]) if m.face in keep_clear else square
     return labels, keep_clear
+
+
+def marker_json(placed: list[NetMarker]) -> dict[str, list[dict[str, Any]]]:
+    """The markers of a net for its JSON report: face name -> its markers' ids and sizes (mm)."""
+    out: dict[str, list[dict[str, Any]]] = {}
+    for m in placed:
+        out.setdefault(m.face, []).append({"id": m.marker_id, "side_mm": m.side_mm, "cell_mm": m.cell_mm})
+    return out
 
 
 def marker_summary(design: Design, sides_mm, cells_mm) -> str:
@@ -192,7 +205,9 @@ def marker_summary(design: Design, sides_mm, cells_mm) -> str:
     ids = [int(i) for i in layout.ids]
     run = len(ids) > 2 and ids == list(range(ids[0], ids[-1] + 1))
     named = f"{ids[0]}-{ids[-1]}" if run else ", ".join(map(str, ids))
-    return (f"{len(layout.faces)} {layout.dictionary} markers (ids {named}), "
+    per_face = np.unique(layout.faces, return_counts=True)[1]
+    several = f", {int(per_face.max())} on each face of {int(np.sum(per_face > 1))}" if per_face.max() > 1 else ""
+    return (f"{len(layout.faces)} {layout.dictionary} markers (ids {named}{several}), "
             f"{span} mm, cells {cell:.2f} mm and up{rest}")  # fmt: skip
 
 
@@ -225,12 +240,14 @@ def marker_report(markers: tuple[Label, ...], depth_mm: float, volume: float, fi
     moments = [v * (m.centroid_mm - 0.5 * depth_mm * m.normal) for v, m in zip(cut, markers)]
     uncut = (first + np.sum(moments, axis=0)) / (volume + sum(cut))
     shift = first / volume - uncut
+    by_face: dict[str, list[dict[str, Any]]] = {}
+    for m in markers:
+        by_face.setdefault(m.face, []).append(
+            {"id": int(m.text.split()[-1]), "side_mm": m.height_mm, "cell_mm": m.stroke_mm,
+             "area_mm2": m.area_mm2, "center_mm": m.center_mm.tolist()}
+        )  # fmt: skip
     return {
-        "markers": {
-            m.face: {"id": int(m.text.split()[-1]), "side_mm": m.height_mm, "cell_mm": m.stroke_mm,
-                     "area_mm2": m.area_mm2, "center_mm": m.center_mm.tolist()}
-            for m in markers
-        },
+        "markers": by_face,
         "marker_volume_mm3": float(sum(cut)),
         "marker_com_shift_mm": shift.tolist(),
         "marker_com_shift_norm_mm": float(np.linalg.norm(shift)),

@@ -296,7 +296,7 @@ def _die_texts(net: Net, labels: dict[str, str], axis, *, face_names, mark, pips
         k = poly.face_index(m.face)
         out.append(Text(f"marker {m.marker_id}", "marker", m.outline, m.face, m.side_mm))
         occupied[k].append(m.keep_clear())
-        clear[k] = m.keep_clear()
+        clear[k] = m.keep_clear() if k not in clear else clear[k].union(m.keep_clear())
     corner_zones: dict[int, list] = {}
     for m in marks if markers else ():
         k = poly.face_index(m.face)

@@ -1,4 +1,4 @@
-"""Marker stickers: one sticker per marked face, cut to the face, with its marker and its value, true scale.
+"""Marker stickers: one sticker per marked face, cut to the face, with its markers and its value, true scale.
 
 For a printed die, or one made elsewhere: print the sheet, cut each sticker
 along its outline and stick it on its face (the face name is in the SVG's
@@ -44,18 +44,20 @@ def sticker_sheets(design: Design, *, size_mm: float | None = None, page: str = 
     bold = load_font()
     labels = design.label_of
     stickers = []
-    for row, k in enumerate(layout.faces):
+    for k in dict.fromkeys(int(f) for f in layout.faces):  # each marked face once, in order
         ring = poly.vertices[poly.faces[k]]
         u, v = face_frame(ring, poly.normals[k], axis)
         origin = ring.mean(axis=0)
         flat = np.column_stack([(ring - origin) @ u, -((ring - origin) @ v)]) * s  # page y points down
-        quad = layout.corners[row] - origin
-        quad = np.column_stack([quad @ u, -(quad @ v)]) * s
-        stickers.append((poly.names[k], int(layout.ids[row]), flat, quad))
+        squares = []
+        for row in np.flatnonzero(layout.faces == k):
+            quad = layout.corners[row] - origin
+            squares.append((int(layout.ids[row]), np.column_stack([quad @ u, -(quad @ v)]) * s))
+        stickers.append((poly.names[k], flat, squares))
     width, height = paper.width - 2 * paper.margin, paper.height - 2 * paper.margin
     sheets: list[Sheet] = []
     x = y = shelf = 0.0
-    for name, marker_id, flat, quad in stickers:
+    for name, flat, squares in stickers:
         lo, hi = flat.min(axis=0), flat.max(axis=0)
         w, h = hi - lo
         if w > width or h > height:
@@ -67,18 +69,19 @@ def sticker_sheets(design: Design, *, size_mm: float | None = None, page: str = 
             x = y = shelf = 0.0
         shift = np.array([paper.margin + x, paper.margin + y]) - lo
         face = flat + shift
-        corners = quad + shift
         sheet = sheets[-1]
         sheet.faces.append((name, face))
         sheet.cut.append(face)
-        marker = cell_outline(marker_cells(layout.dictionary, marker_id), corners)
-        sheet.texts.append(
-            Text(f"marker {marker_id}", "marker", marker, name, float(np.linalg.norm(corners[1] - corners[0])))
-        )
+        region = Polygon(face).buffer(-FACE_MARGIN, join_style="mitre")
+        for marker_id, quad in squares:
+            corners = quad + shift
+            marker = cell_outline(marker_cells(layout.dictionary, marker_id), corners)
+            side = float(np.linalg.norm(corners[1] - corners[0]))
+            sheet.texts.append(Text(f"marker {marker_id}", "marker", marker, name, side))
+            region = region.difference(Polygon(corners).buffer(0.8))
         text = labels.get(name)
         if text:
             whole = Polygon(face)
-            region = whole.buffer(-FACE_MARGIN, join_style="mitre").difference(Polygon(corners).buffer(0.8))
             largest = min(MAX_FACE_TEXT, whole.exterior.distance(polylabel(whole, 0.01)))
             shape = label_shape(text, bold, others=labels.values())
             from shapely import affinity

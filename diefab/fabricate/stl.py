@@ -226,7 +226,7 @@ def build_solid(
         (:func:`~diefab.dice.design.placed_marks`, e.g. the gem's apex), in that corner
         or along that edge of every face that holds it (:func:`~diefab.made.placement.label_faces`).
     markers : bool
-        Inlay each face's ArUco marker (:func:`~diefab.fabricate.markers.solid_markers`): its dark
+        Inlay each face's ArUco markers (:func:`~diefab.fabricate.markers.solid_markers`): their dark
         cells cut `depth_mm` deep, flush once a second material fills them (the inlay part); the value
         labels keep out of each marker's quiet zone.  Cells under `min_stroke_mm` are an error.
 

@@ -97,5 +97,6 @@ def shrunk_body(body, radius: float):
         raise PhysicsError(f"the die shrunk by {r:.4g} has two faces in one plane")
     heights = body.heights[faces]
     basins = RestBasins.of(poly, np.zeros(3))
-    shrunk = replace(body, vertices=poly.vertices, normals=poly.normals, heights=heights, basins=basins)
+    shrunk = replace(body, vertices=poly.vertices, normals=poly.normals, heights=heights, basins=basins,
+                     faces=tuple(np.asarray(f) for f in poly.faces))  # fmt: skip
     return shrunk, faces

@@ -28,12 +28,14 @@ Outcome codes: a face index ``>= 0``, :data:`COCKED` or :data:`UNSETTLED`.
 from __future__ import annotations
 
 import os
+import tempfile
 import threading
 from dataclasses import dataclass
 
 import numpy as np
 
 from diefab.models.basins import RestBasins
+from diefab.physics.shapes import engine_shape, folded_faces
 
 __all__ = [
     "COCKED",
@@ -59,6 +61,9 @@ CHECK_EVERY = 32
 SLOTS = 24
 #: Drops start in this many lanes, on a grid LANE_COLUMNS wide and LANE_SPACING model units apart.
 LANES, LANE_COLUMNS, LANE_SPACING = 24, 6, 20.0
+#: The collision margin pybullet gives the parts of a compound shape (model units); the die is given as the
+#: compound of its faces' pyramids (:mod:`diefab.physics.shapes`) when its margin is this one.
+FACE_MARGIN = 0.001
 #: Where an idle slot waits, far from the others (it never touches anything).
 _PARK = (0.0, 0.0, 1.0e4)
 
@@ -110,6 +115,8 @@ class DieBody:
         Columns are the principal axes in model coordinates (det +1).
     center : (3,) float
         Centre of mass in model coordinates.
+    faces : tuple of (k,) int arrays
+        Each face's corners, indices into `vertices`, in face order.
     """
 
     vertices: np.ndarray
@@ -120,6 +127,7 @@ class DieBody:
     inertia: np.ndarray
     rotation: np.ndarray
     center: np.ndarray
+    faces: tuple[np.ndarray, ...] = ()
 
     @property
     def radius(self) -> float:
@@ -143,7 +151,8 @@ def die_body(poly, mass_props) -> DieBody:
     normals = poly.normals @ axes
     heights = poly.offsets - poly.normals @ center
     basins = RestBasins.of(poly.with_vertices(vertices), np.zeros(3))
-    return DieBody(vertices, normals, heights, basins, float(mass_props.mass), moments, axes, center)
+    return DieBody(vertices, normals, heights, basins, float(mass_props.mass), moments, axes, center,
+                   tuple(np.asarray(f) for f in poly.faces))  # fmt: skip
 
 
 # ----------------------------------------------------------------------
@@ -315,6 +324,7 @@ class World:
                 deterministicOverlappingPairs=1,
                 physicsClientId=cid,
             )
+        p.setPhysicsEngineParameter(enableFileCaching=0, physicsClientId=cid)  # the die's shape files are temporary
         # rounded edges: the shrunk hull, swept by the engine's margin (the faces' indices in the sharp die)
         self.faces = np.arange(len(body.normals))
         margin = s.collision_margin
@@ -344,36 +354,41 @@ class World:
             p.changeDynamics(self.ground, -1, contactStiffness=stiffness, contactDamping=damping,
                              physicsClientId=cid)  # fmt: skip
         p.setCollisionFilterGroupMask(self.ground, -1, 1, 2, physicsClientId=cid)
-        shape = p.createCollisionShape(p.GEOM_MESH, vertices=self.body.vertices.tolist(), physicsClientId=cid)
-        self.dice = []
-        for k in range(slots):
-            die = p.createMultiBody(
-                body.mass,
-                shape,
-                basePosition=[0, 0, _PARK[2] + 10 * k],
-                useMaximalCoordinates=True,
-                physicsClientId=cid,
-            )
-            # pybullet bug: localInertiaDiagonal without mass= on a maximal-coordinate body gives NaN
-            p.changeDynamics(
-                die,
-                -1,
-                mass=body.mass,
-                localInertiaDiagonal=body.inertia.tolist(),
-                restitution=s.restitution,
-                lateralFriction=s.friction,
-                rollingFriction=s.rolling_friction,
-                spinningFriction=s.spinning_friction,
-                collisionMargin=margin,
-                linearDamping=0.0,
-                angularDamping=0.0,
-                # a body that falls asleep at rest and is then reset into the air would hang there
-                activationState=p.ACTIVATION_STATE_DISABLE_SLEEPING,
-                physicsClientId=cid,
-            )
-            p.setCollisionFilterGroupMask(die, -1, 2, 1, physicsClientId=cid)
-            self.dice.append(die)
+        with tempfile.TemporaryDirectory(prefix="diefab-die-") as files:  # read again as each body is made
+            # a compound's parts keep the engine's margin: a die with another one (rounded) stays one hull
+            flat = np.zeros(1, bool)
+            if s.flat_faces and margin == FACE_MARGIN:
+                flat = folded_faces(p, self.body) & self.body.basins.resting
+            if flat.any():
+                shape = engine_shape(p, self.body, flat, cid, files)
+            else:
+                shape = p.createCollisionShape(p.GEOM_MESH, vertices=self.body.vertices.tolist(), physicsClientId=cid)
+            self.dice = [self._add_die(shape, k, margin) for k in range(slots)]
         self._park_all()
+
+    def _add_die(self, shape: int, slot: int, margin: float) -> int:
+        p, cid, s, body = self.p, self.cid, self.settings, self.body
+        die = p.createMultiBody(body.mass, shape, basePosition=[0, 0, _PARK[2] + 10 * slot], useMaximalCoordinates=True,
+                                physicsClientId=cid)  # fmt: skip
+        # pybullet bug: localInertiaDiagonal without mass= on a maximal-coordinate body gives NaN
+        p.changeDynamics(
+            die,
+            -1,
+            mass=body.mass,
+            localInertiaDiagonal=body.inertia.tolist(),
+            restitution=s.restitution,
+            lateralFriction=s.friction,
+            rollingFriction=s.rolling_friction,
+            spinningFriction=s.spinning_friction,
+            collisionMargin=margin,
+            linearDamping=0.0,
+            angularDamping=0.0,
+            # a body that falls asleep at rest and is then reset into the air would hang there
+            activationState=p.ACTIVATION_STATE_DISABLE_SLEEPING,
+            physicsClientId=cid,
+        )
+        p.setCollisionFilterGroupMask(die, -1, 2, 1, physicsClientId=cid)
+        return die
 
     def close(self) -> None:
         if self.cid is not None:
