@@ -91,9 +91,9 @@ def design_argument(func):
     return click.argument("design", metavar="DESIGN")(func)
 
 
-def get_design(spec: str, params: tuple[str, ...] = (), target: str | None = None) -> Design:
-    """Load DESIGN (template name or TOML path) and apply overrides."""
-    design = load_design(spec)
+def get_design(spec: str, params: tuple[str, ...] = (), target: str | None = None, made: str | None = None) -> Design:
+    """Load DESIGN (template or target name, or TOML path; a target's die designed `made`) and apply overrides."""
+    design = load_design(spec, made)
     if params:
         design = design.with_params(**parse_params(params))
     if target is not None:
@@ -101,7 +101,22 @@ def get_design(spec: str, params: tuple[str, ...] = (), target: str | None = Non
     return design
 
 
-def design_inputs(spec: str, design: Design) -> list[Path]:
+#: How a die made as each fill is said in a command's output.
+MADE_WORDS = {"paper": "made of card", "print": "printed"}
+
+
+def template_note(spec: str, design: Design, made: str) -> tuple[str | None, str | None]:
+    """The template a net or STL of SPEC is made from (None for a file), and a line naming it for a target's name."""
+    from diefab.dice.design import template_for
+
+    name = template_for(spec, made)
+    if name is None or name == spec:
+        return name, None
+    how = f", designed to be {MADE_WORDS[made]}" if design.fill.kind == made else ""
+    return name, f"{spec}: the ready-made die {name}{how}"
+
+
+def design_inputs(spec: str, design: Design, made: str | None = None) -> list[Path]:
     """The files DESIGN was read from (design file or template, mesh, SVG symbols): no output may replace them."""
     from diefab.core.errors import DiefabError
     from diefab.dice.design import template_path
@@ -111,7 +126,7 @@ def design_inputs(spec: str, design: Design) -> list[Path]:
         files.append(Path(spec))
     else:
         try:
-            files.append(Path(str(template_path(spec))))
+            files.append(Path(str(template_path(spec, made))))
         except DiefabError:
             pass
     if design.mesh is not None:

@@ -154,7 +154,8 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
         found.design,
         physics=physics,
         name=name or f"{found.design.family}-{_slug(target)}",
-        description=f"designed for {target} by diefab design: {_METHOD[found.method]} "
+        description=f"designed for {target}{f' made as {made.describe()},' * (made.kind != 'solid')} "
+        f"by diefab design: {_METHOD[found.method]} "
         f"({found.model} model, seed {seed})",
     )
     how = (f" --physics {physics_profile}" if physics_profile else "") + (" --robust" if robust else "")

@@ -14,6 +14,7 @@ from diefab.cli.common import (
     json_option,
     out_option,
     paper_balance,
+    template_note,
 )
 
 SIZE_HELP = (
@@ -58,11 +59,12 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
     sheet = parse_page(page)
     if size_mm is not None and size_mm > 0:  # zero and negative sizes: the library's message
         check_size(size_mm)
-    d = get_design(design, params)
+    d = get_design(design, params, made="paper")
+    template, note = template_note(design, d, "paper")
     size = d.size_mm if size_mm is None else size_mm
     ensure_dir(out_dir)
     paths = {kind: output_path(out_dir, d.name, f"-net.{kind}") for kind in kinds}
-    inputs = design_inputs(design, d)
+    inputs = design_inputs(design, d, "paper")
     check_outputs(paths.values(), inputs)
     the_net = design_net(d, size_mm=size_mm, page=sheet, tab_width=tab_width)
     rendered, placed = marked_net(d, the_net, kinds, markers=with_markers, face_names=face_names, copies=copies,
@@ -71,7 +73,7 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
     written = write_files({paths[k]: rendered[k] for k in kinds}, inputs=inputs)
     if warning:
         click.echo(f"diefab: warning: {warning}", err=True)
-    balance = paper_balance(d, the_net, design, **card)
+    balance = paper_balance(d, the_net, template or design, **card)
     if balance.warning:
         click.echo(f"diefab: warning: {balance.warning}", err=True)
     from diefab.made.unfold import pack_copies
@@ -80,11 +82,13 @@ def net(design, params, size_mm, page, formats, face_names, tab_width, copies, m
     if as_json:
         from diefab.fabricate.markers import marker_json
 
-        emit_json({"files": [str(p) for p in written], "size_mm": size, "pieces": the_net.n_pieces,
-                   "pages": n_pages, "tabs": len(the_net.tabs),
+        emit_json({"files": [str(p) for p in written], "template": template, "size_mm": size,
+                   "pieces": the_net.n_pieces, "pages": n_pages, "tabs": len(the_net.tabs),
                    "tab_offset_mm": the_net.search.get("tab_offset_mm", 0.0), **balance.as_json(),
                    **({"markers": marker_json(placed)} if placed else {})})  # fmt: skip
         return
+    if note:
+        click.echo(note)
     for path in written:
         click.echo(str(path))
     pieces = f"{the_net.n_pieces} piece{'s' * (the_net.n_pieces > 1)}{' each' * (copies > 1)}"

@@ -50,7 +50,8 @@ def predict(design: str, params, model: str, target: str | None, as_json: bool, 
     from diefab.models.probabilities import face_probabilities, to_values
     from diefab.stats.goodness import jsd, pearson_divergence, tvd
 
-    d = apply_fill(get_design(design, params, target), **pop_fill(fill))
+    fill = pop_fill(fill)
+    d = apply_fill(get_design(design, params, target, fill.get("fill_kind")), **fill)
     choice = best_model(d) if model == "auto" else None
     model = choice.name if choice is not None else model
     fill_model = d.fill

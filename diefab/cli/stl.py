@@ -16,6 +16,7 @@ from diefab.cli.common import (
     json_option,
     out_option,
     print_balance,
+    template_note,
 )
 from diefab.cli.net import SIZE_HELP
 from diefab.core.errors import DiefabError
@@ -91,13 +92,14 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face
     bad = [f for f in kinds if f not in ("stl", "3mf")]
     if bad or not kinds:
         raise click.BadParameter(f"{formats!r}: formats are stl and 3mf", param_hint="--format")
-    d = get_design(design, params)
+    d = get_design(design, params, made="print")
+    template, note = template_note(design, d, "print")
     try:
         fill = apply_fill(d, "print", **settings).fill
     except DiefabError as exc:
         raise FabricationError(str(exc)) from exc
     ensure_dir(out_dir)
-    inputs = [*design_inputs(design, d), *([font_file] if font_file else [])]
+    inputs = [*design_inputs(design, d, "print"), *([font_file] if font_file else [])]
     names = {k: output_path(out_dir, d.name, f".{k}") for k in dict.fromkeys(kinds)}
     if preview:
         names["preview"] = output_path(out_dir, d.name, "-preview.png")
@@ -120,14 +122,23 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face
     written = [str(p) for p in write_files(payloads, inputs=inputs)]
     for line in solid.warnings:
         click.echo(f"diefab: warning: {line}", err=True)
-    balance = print_balance(d, solid, fill, design)
+    balance = print_balance(d, solid, fill, template or design)
     if balance.warning:
         click.echo(f"diefab: warning: {balance.warning}", err=True)
-    report = {"file": written[0], "files": written, "reading": reading_note(d), **solid.report, **balance.as_json()}
+    report = {
+        "file": written[0],
+        "files": written,
+        "template": template,
+        "reading": reading_note(d),
+        **solid.report,
+        **balance.as_json(),
+    }
     if as_json:
         emit_json(report)
         return
     r = solid.report
+    if note:
+        click.echo(note)
     how = (
         f"{len(r['embossed'])} labels embossed, {len(r['engraved'])} engraved"
         if r["embossed"] and r["engraved"]

@@ -72,7 +72,8 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
     fill = pop_fill(physics)
     if scheduler is not None:
         refuse_options(ctx, ["workers"], "does not apply with --scheduler (the cluster's workers run the drops)")
-    d = apply_fill(get_design(design, params, target), **fill)
+    made = fill.get("fill_kind")  # a target's name made of card or printed takes the die designed so
+    d = apply_fill(get_design(design, params, target, made), **fill)
     settings = physics_settings(d, physics_profile, **physics)
     if sensitivity:
         if plot_file is not None or report_file is not None:
@@ -83,10 +84,10 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
         if plot_file.suffix.lower() not in (".png", ".svg"):
             raise click.BadParameter(f"{plot_file} must end in .png or .svg", param_hint="--plot")
         ensure_dir(plot_file.parent)
-        check_outputs([plot_file], design_inputs(design, d))
+        check_outputs([plot_file], design_inputs(design, d, made))
     if report_file is not None:
         ensure_dir(report_file.parent)
-        check_outputs([report_file, *([plot_file] if plot_file else [])], design_inputs(design, d))
+        check_outputs([report_file, *([plot_file] if plot_file else [])], design_inputs(design, d, made))
     bar = None
     if sys.stderr.isatty():
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
@@ -154,7 +155,7 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
     }
     if plot_file is not None:
         atomic_write(plot_file, plot_validation(d, result, fmt=plot_file.suffix.lower()[1:], model=choice.name),
-                     inputs=design_inputs(design, d))  # fmt: skip
+                     inputs=design_inputs(design, d, made))  # fmt: skip
     if report_file is not None:
         _write_report(report_file, d, design, fit, result, said.text, settings)
     if as_json:
@@ -205,7 +206,7 @@ def _write_report(path, d, spec, fit, result, verdict, settings) -> None:
                "physics: " + ", ".join(f"{k}={v}" for k, v in settings.as_dict().items())],
         pictures=die_pictures(d),
     )  # fmt: skip
-    atomic_write(path, render_report(report).encode("utf-8"), inputs=design_inputs(spec, d))
+    atomic_write(path, render_report(report).encode("utf-8"), inputs=design_inputs(spec, d, d.fill.kind))
 
 
 def _sensitivity(d, base, sims, seed, workers, scheduler, as_json, overrides) -> None:

@@ -9,7 +9,15 @@ Examples
 (0, '+2')
 """
 
-from diefab.dice.design.files import design_to_toml, list_templates, load_design, parse_design, template_path
+from diefab.dice.design.files import (
+    design_to_toml,
+    list_templates,
+    load_design,
+    parse_design,
+    template_for,
+    template_name,
+    template_path,
+)
 from diefab.dice.design.spec import (
     Design,
     design_axis,
@@ -30,5 +38,7 @@ __all__ = [
     "placed_marks",
     "reference_length",
     "signed_number",
+    "template_for",
+    "template_name",
     "template_path",
 ]

@@ -21,7 +21,15 @@ from diefab.dice.design.spec import Design
 from diefab.dice.schema import check_design_data
 from diefab.made.fill import Fill
 
-__all__ = ["design_to_toml", "list_templates", "load_design", "parse_design", "template_path"]
+__all__ = [
+    "design_to_toml",
+    "list_templates",
+    "load_design",
+    "parse_design",
+    "template_for",
+    "template_name",
+    "template_path",
+]
 
 #: Largest design file read, bytes (a convex die of a thousand faces is under a megabyte).
 DESIGN_MAX_BYTES = 16 << 20
@@ -50,30 +58,94 @@ def list_templates() -> list[Design]:
     return [parse_design(p.read_text(encoding="utf-8"), source=str(p)) for p in files]
 
 
-def template_path(name: str):
-    """The path of the shipped template called `name`, or of the ready-made die for the target `name`.
+#: Fills a ready-made die may be designed for: its template is the plain one's name and ``-KIND``.
+MADE_KINDS = ("paper", "print")
 
-    A target is looked up by its spelling in lower case with every run of
-    other characters than letters and digits made one ``-``: ``3dF`` is
-    the template ``3df``, ``binomial:4`` is ``binomial-4``.
+
+def _slug(name: str) -> str:
+    return re.sub(r"[^a-z0-9]+", "-", str(name).lower()).strip("-")
+
+
+def _template_target(path) -> str | None:
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8")).get("target")
+    except (OSError, tomllib.TOMLDecodeError):
+        return None
+
+
+def template_name(name: str, made: str | None = None) -> str:
+    """The shipped template that `name` stands for, made as `made` (``paper``, ``print`` or None).
+
+    A template's own name is that template (``3df``, ``3df-paper``).  Any
+    other name is a target, looked up by its spelling in lower case with
+    every run of other characters than letters and digits made one ``-``
+    (``3dF`` is ``3df``, ``binomial:4`` is ``binomial-4``); so is a template's
+    name that is spelled as its target (``3d6``, ``2d6``).  A target made as
+    `made` takes the die designed for that fill where one is shipped
+    (``3dF`` made of paper is ``3df-paper``, ``3d6`` printed is
+    ``3d6-print``), else the plain one.
+
+    Parameters
+    ----------
+    name : str
+        A template's name or a target's.
+    made : {"paper", "print"} or None
+        How the die will be made; None (or ``solid``) takes the plain template.
+
+    Returns
+    -------
+    str
+        The template's name (its file is ``NAME.toml``).
+
+    Raises
+    ------
+    DesignError
+        If no template stands for `name`; the message points to ``diefab design``.
+
+    Examples
+    --------
+    >>> template_name("3dF", "paper"), template_name("3df", "paper"), template_name("uniform:5", "print")
+    ('3df-paper', '3df', 'uniform-5')
     """
     folder = _templates_dir()
-    path = folder / f"{name}.toml"
-    if not path.is_file():
-        slug = re.sub(r"[^a-z0-9]+", "-", str(name).lower()).strip("-")
-        path = folder / f"{slug}.toml"
-    if not path.is_file():
-        known = ", ".join(sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml")))
-        raise DesignError(f"unknown template {name!r} (templates: {known}; or give a path to a .toml file; "
-                          f"or make a die for any target with: diefab design TARGET)")  # fmt: skip
-    return path
+    exact = folder / f"{name}.toml"
+    if exact.is_file() and (made is None or _template_target(exact) != name):
+        return str(name)
+    slug = _slug(name)
+    if made in MADE_KINDS and (folder / f"{slug}-{made}.toml").is_file():
+        return f"{slug}-{made}"
+    if (folder / f"{slug}.toml").is_file():
+        return slug
+    known = ", ".join(sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml")))
+    raise DesignError(f"unknown template {name!r} (templates: {known}; or give a path to a .toml file; "
+                      f"or make a die for any target with: diefab design TARGET)")  # fmt: skip
 
 
-def load_design(spec: str | Path) -> Design:
-    """Load a design by template name or from a TOML file path."""
+def template_path(name: str, made: str | None = None):
+    """The path of the shipped template :func:`template_name` finds for `name` made as `made`."""
+    return _templates_dir() / f"{template_name(name, made)}.toml"
+
+
+def template_for(spec: str | Path, made: str | None = None) -> str | None:
+    """The template a net, STL or check of `spec` made as `made` is built from; None for a design file's path.
+
+    Examples
+    --------
+    >>> template_for("3dF", "paper"), template_for("3dF"), template_for("mine.toml", "paper")
+    ('3df-paper', '3df', None)
+    """
+    text = str(spec)
+    if text.endswith(".toml") or Path(text).exists() or "/" in text or "\\" in text:
+        return None
+    return template_name(text, made)
+
+
+def load_design(spec: str | Path, made: str | None = None) -> Design:
+    """Load a design from a TOML file path, or the template :func:`template_name` finds for `spec` made as `made`."""
     text = str(spec)
     path = Path(text)
-    if text.endswith(".toml") or path.exists() or "/" in text or "\\" in text:
+    name = template_for(text, made)
+    if name is None:
         if not path.is_file():
             raise DesignError(f"design file {text} {'is not a regular file' if path.exists() else 'does not exist'}")
         if path.stat().st_size > MAX_DESIGN_BYTES:
@@ -84,7 +156,7 @@ def load_design(spec: str | Path) -> Design:
         except (OSError, UnicodeDecodeError) as exc:
             raise DesignError(f"cannot read design file {text}: {exc}") from exc
         return parse_design(content, source=text, base=path.parent)
-    return parse_design(template_path(text).read_text(encoding="utf-8"), source=f"template {text}")
+    return parse_design(template_path(name).read_text(encoding="utf-8"), source=f"template {name}")
 
 
 def parse_design(content: str, *, source: str = "<string>", base: Path | None = None) -> Design:
