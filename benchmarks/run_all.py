@@ -40,6 +40,7 @@ BENCHMARKS = [
     ("bench_heldout.py", [], []),  # cached: prints in half a minute
     ("bench_basins.py", [], []),
     ("bench_many_faces.py", [], ["--sims", "40"]),
+    ("bench_fair_shapes.py", [], ["--faces", "22", "--sims", "600"]),
 ]
 
 
