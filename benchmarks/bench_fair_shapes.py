@@ -77,7 +77,7 @@ def describe(run: dict) -> str:
 
 def main() -> None:
     from diefab.dice.design import design_to_toml
-    from diefab.physics.shapes import folded_faces
+    from diefab.physics.shapes import folded_resting_faces
     from diefab.physics.world import die_body, import_pybullet
     from diefab.search.symmetric import tipping_angle
 
@@ -95,7 +95,7 @@ def main() -> None:
             toml.write_text(design_to_toml(d))
             poly = d.polyhedron
             body = die_body(poly, d.mass_properties())
-            folds = bool((folded_faces(import_pybullet(), body) & body.basins.resting).any())
+            folds = bool(folded_resting_faces(import_pybullet(), body).any())
             tipping = tipping_angle(poly, poly.centroid)
             print(f"{label:18s} tipping {tipping:5.1f} deg, folds {'yes' if folds else 'no'}", flush=True)
             hull = drop(toml, args.sims, args.seed, args.workers)

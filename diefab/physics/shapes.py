@@ -50,7 +50,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["FlatPart", "engine_shape", "flat_parts", "folded_faces"]
+__all__ = ["FlatPart", "engine_shape", "flat_parts", "folded_faces", "folded_resting_faces"]
 
 #: The rest of a die whose resting faces are held flat is its hull shrunk by this fraction towards the centre of mass.
 INSET = 2e-3
@@ -164,6 +164,11 @@ def folded_faces(p, body) -> np.ndarray:
             corners = rounded[np.asarray(ring)]
             fold[k] = np.linalg.svd(corners - corners.mean(axis=0), compute_uv=False)[-1]
     return fold > FOLD * body.radius
+
+
+def folded_resting_faces(p, body) -> np.ndarray:
+    """(m,) bool: the faces `body` can rest on that pybullet folds as one hull: the faces flat faces hold flat."""
+    return folded_faces(p, body) & body.basins.resting
 
 
 def _write_obj(path: Path, points: np.ndarray) -> None:

@@ -27,6 +27,7 @@ Outcome codes: a face index ``>= 0``, :data:`COCKED` or :data:`UNSETTLED`.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import tempfile
 import threading
@@ -35,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from diefab.models.basins import RestBasins
-from diefab.physics.shapes import engine_shape, folded_faces
+from diefab.physics.shapes import engine_shape, folded_resting_faces
 
 __all__ = [
     "COCKED",
@@ -324,7 +325,6 @@ class World:
                 deterministicOverlappingPairs=1,
                 physicsClientId=cid,
             )
-        p.setPhysicsEngineParameter(enableFileCaching=0, physicsClientId=cid)  # the die's shape files are temporary
         # rounded edges: the shrunk hull, swept by the engine's margin (the faces' indices in the sharp die)
         self.faces = np.arange(len(body.normals))
         margin = s.collision_margin
@@ -354,12 +354,12 @@ class World:
             p.changeDynamics(self.ground, -1, contactStiffness=stiffness, contactDamping=damping,
                              physicsClientId=cid)  # fmt: skip
         p.setCollisionFilterGroupMask(self.ground, -1, 1, 2, physicsClientId=cid)
-        with tempfile.TemporaryDirectory(prefix="diefab-die-") as files:  # read again as each body is made
-            # a compound's parts keep the engine's margin: a die with another one (rounded) stays one hull
-            flat = np.zeros(1, bool)
-            if s.flat_faces and margin == FACE_MARGIN:
-                flat = folded_faces(p, self.body) & self.body.basins.resting
+        # a compound's parts keep the engine's margin: a die with another one (rounded) stays one hull
+        flat = folded_resting_faces(p, self.body) if s.flat_faces and margin == FACE_MARGIN else np.zeros(1, bool)
+        # the parts' files are read again as each body is made
+        with tempfile.TemporaryDirectory(prefix="diefab-die-") if flat.any() else contextlib.nullcontext() as files:
             if flat.any():
+                p.setPhysicsEngineParameter(enableFileCaching=0, physicsClientId=cid)  # the files are temporary
                 shape = engine_shape(p, self.body, flat, cid, files)
             else:
                 shape = p.createCollisionShape(p.GEOM_MESH, vertices=self.body.vertices.tolist(), physicsClientId=cid)

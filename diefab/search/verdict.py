@@ -90,13 +90,13 @@ def closing_check(
 
 def folded_resting_faces(design: Design, settings) -> int:
     """How many faces `design` rests on the engine holds folded under `settings` (0 with ``flat_faces``)."""
-    from diefab.physics.shapes import folded_faces
+    from diefab.physics import shapes
     from diefab.physics.world import die_body, import_pybullet
 
     if settings.flat_faces:
         return 0
     body = die_body(design.polyhedron, design.mass_properties())
-    return int((folded_faces(import_pybullet(), body) & body.basins.resting).sum())
+    return int(shapes.folded_resting_faces(import_pybullet(), body).sum())
 
 
 def fast_agreement(design: Design, simulated: np.ndarray) -> dict:
