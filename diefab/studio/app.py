@@ -41,6 +41,10 @@ FILL_SLIDERS = {
               "layer_mm": ("layer height, mm", 0.08, 0.32, 0.02), "nozzle_mm": ("nozzle, mm", 0.2, 0.8, 0.05)},
 }  # fmt: skip
 
+#: Seconds a page may go unheard before the server drops it (and the browser loads it afresh).  NiceGUI's 3 s
+#: is shorter than a design search on a busy machine can keep the server from answering.
+RECONNECT_SECONDS = 15.0
+
 #: The 3D die is redrawn once edits pause this long, seconds: while a slider is dragged the chart goes first.
 DIE_PAUSE = 0.3
 
@@ -116,8 +120,9 @@ class Studio:
         ui.on("net_hover", lambda e: self.highlight(e.args or None))
         ui.on("net_click", lambda e: self.select_face(e.args))
         self.client = context.client
+        # a page that lost its connection for a moment (a busy machine, a sleeping laptop) keeps its jobs;
+        # they stop once the page is gone for good
         self.client.on_delete(self.stop)
-        self.client.on_disconnect(self.stop)
         ui.timer(0.25, self.poll)
         self.rebuild_controls()
         self.refresh()
@@ -359,4 +364,4 @@ def serve(design: Design, out_dir: Path, *, host: str = "127.0.0.1", port: int =
         return {"ok": True}
 
     ui.run(host=host, port=port, show=show, reload=False, title="diefab studio", uvicorn_logging_level="warning",
-           favicon="🎲", show_welcome_message=False)  # fmt: skip
+           favicon="🎲", show_welcome_message=False, reconnect_timeout=RECONNECT_SECONDS)  # fmt: skip

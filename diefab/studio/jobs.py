@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import multiprocessing as mp
 import queue as queue_module
+import threading
 import time
 from collections.abc import Callable
 from typing import Any
@@ -90,8 +91,8 @@ class Job:
         self.poll()
 
     def cancel(self) -> None:
-        """Stop the worker (SIGTERM, then SIGKILL after 2 s)."""
-        end_process(self.process)
+        """Stop the worker (SIGTERM, then SIGKILL after 2 s), without waiting for it to end."""
+        end_process_soon(self.process)
         if not self.finished:
             self.error, self.finished = "cancelled", True
         self._queue.close()
@@ -105,6 +106,17 @@ def end_process(process) -> None:
         if process.is_alive():
             process.kill()
             process.join(1.0)
+
+
+def end_process_soon(process) -> None:
+    """Send a worker `process` SIGTERM now, and leave the wait (and SIGKILL if need be) to a thread.
+
+    The page's event loop must not block: the browser's heartbeat goes
+    unanswered while it waits, and the page is dropped and loaded afresh.
+    """
+    if process.is_alive():
+        process.terminate()
+        threading.Thread(target=end_process, args=(process,), name="diefab-end-worker", daemon=True).start()
 
 
 def _run(func, args, q) -> None:
@@ -160,8 +172,8 @@ class Evaluator:
             return payload
 
     def stop(self) -> None:
-        """End the worker (SIGTERM, then SIGKILL after 2 s)."""
-        end_process(self.process)
+        """End the worker (SIGTERM, then SIGKILL after 2 s), without waiting for it to end."""
+        end_process_soon(self.process)
 
 
 def _evaluate_forever(inbox, outbox) -> None:
