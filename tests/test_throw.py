@@ -6,7 +6,7 @@ import pytest
 
 from diefab.core.errors import PhysicsError
 from diefab.physics.simulate import PhysicsSettings
-from diefab.physics.throw import GENTLE, VIGOROUS, throw_settings
+from diefab.physics.throw import GENTLE, HARD, VIGOROUS, throw_settings
 
 
 def test_vigor_one_is_the_default_throw_and_zero_the_gentle_release():
@@ -23,11 +23,27 @@ def test_every_setting_moves_linearly_and_the_rest_of_the_base_is_kept():
     assert half.drop_height == pytest.approx((GENTLE["drop_height"] + VIGOROUS["drop_height"]) / 2)
     assert half.angular_velocity[1] == pytest.approx(VIGOROUS["spin"] / 2)
     assert (half.rolling_friction, half.capture_energy) == (0.01, 0.2)
-    heights = [throw_settings(v).drop_height for v in (0, 0.25, 0.5, 0.75, 1)]
+    heights = [throw_settings(v).drop_height for v in (0, 0.25, 0.5, 0.75, 1, 1.5, 2)]
     assert heights == sorted(heights)
 
 
-@pytest.mark.parametrize("bad", [-0.1, 1.5, float("nan"), "1", True, None])
+def test_past_one_the_throw_moves_linearly_on_to_the_hard_end():
+    hard = throw_settings(2.0)
+    assert (hard.restitution, hard.friction, hard.drop_height, hard.height_jitter, hard.angular_velocity) == (
+        HARD["restitution"],
+        HARD["friction"],
+        HARD["drop_height"],
+        HARD["height_jitter"],
+        (0.0, HARD["spin"]),
+    )
+    s = throw_settings(1.25)
+    for field, key in (("restitution", "restitution"), ("drop_height", "drop_height"), ("friction", "friction")):
+        assert getattr(s, field) == pytest.approx(0.75 * VIGOROUS[key] + 0.25 * HARD[key])
+    # the two pieces meet at the default throw
+    assert throw_settings(1.0 + 1e-9).drop_height == pytest.approx(throw_settings(1.0 - 1e-9).drop_height)
+
+
+@pytest.mark.parametrize("bad", [-0.1, 2.5, float("nan"), "1", True, None])
 def test_vigor_outside_zero_one_is_refused(bad):
     with pytest.raises(PhysicsError, match="vigor"):
         throw_settings(bad)

@@ -1,4 +1,4 @@
-"""A one-parameter throw: from a die released at rest just above the table to the paper's vigorous drop.
+"""A one-parameter throw: from a die released at rest just above the table, through the paper's drop, to a hard throw.
 
 Two set-ups predict real printed dice differently.  The source of the
 real-rolls data (Baktash et al. 2025) simulates a die released at rest,
@@ -23,6 +23,9 @@ True
 >>> s = throw_settings(0.0)
 >>> s.restitution, s.friction, s.angular_velocity
 (0.0, 0.1, (0.0, 0.0))
+>>> s = throw_settings(1.5)
+>>> s.restitution, s.drop_height, s.angular_velocity
+(0.45, 7.5, (0.0, 15.0))
 """
 
 from __future__ import annotations
@@ -32,7 +35,7 @@ from dataclasses import replace
 from diefab.core.errors import PhysicsError
 from diefab.physics.simulate import PhysicsSettings
 
-__all__ = ["GENTLE", "GENTLE_HEIGHT", "VIGOROUS", "throw_settings"]
+__all__ = ["GENTLE", "GENTLE_HEIGHT", "HARD", "MAX_VIGOR", "VIGOROUS", "throw_settings"]
 
 #: Centre-of-mass height (model units) of the gentle release: above the radius of every real die here (at most 1.55).
 GENTLE_HEIGHT = 1.6
@@ -44,9 +47,15 @@ GENTLE = {"restitution": 0.0, "friction": 0.1, "drop_height": GENTLE_HEIGHT, "he
 #: The settings at vigor 1: the paper's throw (diefab's defaults).
 VIGOROUS = {"restitution": 0.3, "friction": 0.8, "drop_height": 5.0, "height_jitter": 0.5, "spin": 10.0}
 
+#: The settings at vigor 2: a hard throw, from twice the height with twice the spin, on a bouncier table.
+HARD = {"restitution": 0.6, "friction": 0.8, "drop_height": 10.0, "height_jitter": 1.0, "spin": 20.0}
+
+#: The largest vigor (:data:`HARD`).
+MAX_VIGOR = 2.0
+
 
 def throw_settings(vigor: float, base: PhysicsSettings | None = None) -> PhysicsSettings:
-    """Physics settings of a throw of `vigor` in [0, 1] (see the module docstring) over `base` (default settings).
+    """Physics settings of a throw of `vigor` in [0, 2] (see the module docstring) over `base` (default settings).
 
     ``spin`` is the upper end of the initial spin range (``angular_velocity``,
     rad/s, from 0); every other setting of `base` is kept.
@@ -54,12 +63,13 @@ def throw_settings(vigor: float, base: PhysicsSettings | None = None) -> Physics
     Raises
     ------
     PhysicsError
-        `vigor` is not a number in [0, 1].
+        `vigor` is not a number in [0, 2].
     """
-    if isinstance(vigor, bool) or not isinstance(vigor, (int, float)) or not 0.0 <= vigor <= 1.0:
-        raise PhysicsError(f"vigor={vigor!r} must be a number in [0, 1]")
+    if isinstance(vigor, bool) or not isinstance(vigor, (int, float)) or not 0.0 <= vigor <= MAX_VIGOR:
+        raise PhysicsError(f"vigor={vigor!r} must be a number in [0, {MAX_VIGOR:g}]")
     v = float(vigor)
-    mixed = {k: (1 - v) * GENTLE[k] + v * VIGOROUS[k] for k in GENTLE}
+    low, high, t = (GENTLE, VIGOROUS, v) if v <= 1.0 else (VIGOROUS, HARD, v - 1.0)
+    mixed = {k: (1 - t) * low[k] + t * high[k] for k in GENTLE}
     spin = mixed.pop("spin")
     return replace(base or PhysicsSettings(), **{k: round(x, 9) for k, x in mixed.items()},
                    angular_velocity=(0.0, round(spin, 9)))  # fmt: skip
