@@ -92,31 +92,28 @@ class Job:
 
     def cancel(self) -> None:
         """Stop the worker (SIGTERM, then SIGKILL after 2 s), without waiting for it to end."""
-        end_process_soon(self.process)
+        end_process(self.process)
         if not self.finished:
             self.error, self.finished = "cancelled", True
         self._queue.close()
 
 
 def end_process(process) -> None:
-    """End a worker `process`: SIGTERM, then SIGKILL if it is still alive 2 s later."""
-    if process.is_alive():
-        process.terminate()
-        process.join(2.0)
-        if process.is_alive():
-            process.kill()
-            process.join(1.0)
-
-
-def end_process_soon(process) -> None:
-    """Send a worker `process` SIGTERM now, and leave the wait (and SIGKILL if need be) to a thread.
+    """End a worker `process` without waiting for it: SIGTERM now, SIGKILL from a thread if it lives 2 s on.
 
     The page's event loop must not block: the browser's heartbeat goes
     unanswered while it waits, and the page is dropped and loaded afresh.
     """
     if process.is_alive():
         process.terminate()
-        threading.Thread(target=end_process, args=(process,), name="diefab-end-worker", daemon=True).start()
+        threading.Thread(target=_kill_if_alive, args=(process,), name="diefab-end-worker", daemon=True).start()
+
+
+def _kill_if_alive(process, grace: float = 2.0) -> None:
+    process.join(grace)
+    if process.is_alive():
+        process.kill()
+        process.join(1.0)
 
 
 def _run(func, args, q) -> None:
@@ -173,7 +170,7 @@ class Evaluator:
 
     def stop(self) -> None:
         """End the worker (SIGTERM, then SIGKILL after 2 s), without waiting for it to end."""
-        end_process_soon(self.process)
+        end_process(self.process)
 
 
 def _evaluate_forever(inbox, outbox) -> None:
