@@ -74,6 +74,7 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
         refuse_options(ctx, ["workers"], "does not apply with --scheduler (the cluster's workers run the drops)")
     made = fill.get("fill_kind")  # a target's name made of card or printed takes the die designed so
     d = apply_fill(get_design(design, params, target, made), **fill)
+    inputs = design_inputs(design, d, made)  # no output may replace them
     settings = physics_settings(d, physics_profile, **physics)
     if sensitivity:
         if plot_file is not None or report_file is not None:
@@ -84,10 +85,10 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
         if plot_file.suffix.lower() not in (".png", ".svg"):
             raise click.BadParameter(f"{plot_file} must end in .png or .svg", param_hint="--plot")
         ensure_dir(plot_file.parent)
-        check_outputs([plot_file], design_inputs(design, d, made))
+        check_outputs([plot_file], inputs)
     if report_file is not None:
         ensure_dir(report_file.parent)
-        check_outputs([report_file, *([plot_file] if plot_file else [])], design_inputs(design, d, made))
+        check_outputs([report_file, *([plot_file] if plot_file else [])], inputs)
     bar = None
     if sys.stderr.isatty():
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
@@ -155,9 +156,9 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
     }
     if plot_file is not None:
         atomic_write(plot_file, plot_validation(d, result, fmt=plot_file.suffix.lower()[1:], model=choice.name),
-                     inputs=design_inputs(design, d, made))  # fmt: skip
+                     inputs=inputs)  # fmt: skip
     if report_file is not None:
-        _write_report(report_file, d, design, fit, result, said.text, settings)
+        _write_report(report_file, d, fit, result, said.text, settings, inputs)
     if as_json:
         emit_json(out)
         return
@@ -193,7 +194,7 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
             con.print(f"wrote {written}")
 
 
-def _write_report(path, d, spec, fit, result, verdict, settings) -> None:
+def _write_report(path, d, fit, result, verdict, settings, inputs) -> None:
     from diefab.core.files import atomic_write
     from diefab.fabricate.report import DieReport, die_pictures, render_report
 
@@ -206,7 +207,7 @@ def _write_report(path, d, spec, fit, result, verdict, settings) -> None:
                "physics: " + ", ".join(f"{k}={v}" for k, v in settings.as_dict().items())],
         pictures=die_pictures(d),
     )  # fmt: skip
-    atomic_write(path, render_report(report).encode("utf-8"), inputs=design_inputs(spec, d, d.fill.kind))
+    atomic_write(path, render_report(report).encode("utf-8"), inputs=inputs)
 
 
 def _sensitivity(d, base, sims, seed, workers, scheduler, as_json, overrides) -> None:
