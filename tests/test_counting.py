@@ -89,12 +89,12 @@ def test_the_verdict_names_the_limit_and_passes_a_die_within_tolerance():
 def test_the_verdict_names_faces_the_engine_folds():
     from diefab.dice.design import load_design
     from diefab.physics.simulate import PhysicsSettings
-    from diefab.search.verdict import folded_resting_faces
+    from diefab.search.verdict import folded_resting_count
 
     kites = load_design("uniform-5")
-    assert folded_resting_faces(kites, PhysicsSettings()) == 10
-    assert folded_resting_faces(kites, PhysicsSettings(flat_faces=True)) == 0
-    assert folded_resting_faces(load_design("2d6"), PhysicsSettings()) == 0  # triangles
+    assert folded_resting_count(kites, PhysicsSettings()) == 10
+    assert folded_resting_count(kites, PhysicsSettings(flat_faces=True)) == 0
+    assert folded_resting_count(load_design("2d6"), PhysicsSettings()) == 0  # triangles
     check = {"tvd": 0.025, "n": 30_000, "expected_tvd": 0.005, "folded_faces": 22}
     verdict = judge(parse_target("uniform:11"), check, 0.02, method="fair")
     assert not verdict.met and "22 of the faces" in verdict.why and "--flat-faces" in verdict.why

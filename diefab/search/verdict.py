@@ -33,7 +33,7 @@ __all__ = [
     "Verdict",
     "closing_check",
     "fast_agreement",
-    "folded_resting_faces",
+    "folded_resting_count",
     "judge",
     "smallest_probability",
 ]
@@ -66,7 +66,7 @@ def closing_check(
         (a die that rolls the target exactly would show about this TVD at
         these drops), ``probabilities`` ((k,) observed, over
         ``design.support``) and ``folded_faces`` (the resting faces the
-        engine holds folded, :func:`folded_resting_faces`).
+        engine holds folded, :func:`folded_resting_count`).
     """
     from diefab.physics.simulate import PhysicsSettings, simulate
     from diefab.stats.goodness import goodness_of_fit
@@ -84,11 +84,11 @@ def closing_check(
                        "p_value": float(fit.p_value), "expected_tvd": float(fit.expected_tvd),
                        "probabilities": np.asarray(fit.observed, dtype=float)})  # fmt: skip
     worst = max(checks, key=lambda c: c["tvd"])
-    worst = {**worst, "folded_faces": folded_resting_faces(design, PhysicsSettings.from_mapping(runs[0]))}
+    worst = {**worst, "folded_faces": folded_resting_count(design, PhysicsSettings.from_mapping(runs[0]))}
     return {**worst, "throws": checks} if throws else worst
 
 
-def folded_resting_faces(design: Design, settings) -> int:
+def folded_resting_count(design: Design, settings) -> int:
     """How many faces `design` rests on the engine holds folded under `settings` (0 with ``flat_faces``)."""
     from diefab.physics import shapes
     from diefab.physics.world import die_body, import_pybullet
