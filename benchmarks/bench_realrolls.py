@@ -25,8 +25,9 @@ rolls of 15 steel square cuboids (:mod:`diefab.search.published`).
 
 With ``--guard`` it computes, in this process, the figures the real-dice
 guard test (``tests/test_realrolls_guard.py``) checks: each landing model's
-TVD per die and ``validate`` at ``--sims`` drops (seed ``--seed``, default
-physics), simulated counts cached in ``benchmarks/results/
+TVD per die and ``validate`` at ``--sims`` drops (seed ``--seed``), at the
+default physics and under each shipped profile fitted on real dice
+(:func:`diefab.physics.profiles.fitted_profiles`), simulated counts cached in ``benchmarks/results/
 realrolls-sim-cache.json`` under a key of the design, settings, drops, seed
 and the simulation's code; ``--record`` writes their means over the dice
 to ``benchmarks/results/realrolls-guard.json``, the figures the test
@@ -52,6 +53,7 @@ from pathlib import Path
 
 import numpy as np
 
+from diefab.physics.profiles import fitted_profiles
 from diefab.physics.realrolls import RealRolls, load_real_rolls
 from diefab.search.fidelity import (
     LANDING_MODELS,
@@ -201,11 +203,13 @@ def guard(args) -> None:
         dice = [d for d in dice if d.name in args.dice.split(",")]
     started = time.perf_counter()
     cache = SimulationCache(SIM_CACHE)
-    scores = guard_scores(dice, drops=args.sims, seed=args.seed, cache=cache, workers=args.workers)
-    columns = [*MODELS, "validate"]
-    print(f"{'die':<13} {'rolls':>5} {'noise':>8} " + " ".join(f"{c:>11}" for c in columns))
+    profiles = fitted_profiles()
+    scores = guard_scores(dice, drops=args.sims, seed=args.seed, cache=cache, workers=args.workers,
+                          profiles=profiles)  # fmt: skip
+    columns = [*MODELS, "validate", *(f"validate --profile {p}" for p in profiles)]
+    print(f"{'die':<13} {'rolls':>5} {'noise':>8} " + " ".join(f"{c.split()[-1]:>13}" for c in columns))
     for d in dice:
-        print(f"{d.name:<13} {d.n:>5} {noise_tvd(d, 4000):>8.4f} " + " ".join(f"{scores[d.name][c]:>11.4f}"
+        print(f"{d.name:<13} {d.n:>5} {noise_tvd(d, 4000):>8.4f} " + " ".join(f"{scores[d.name][c]:>13.4f}"
                                                                          for c in columns))  # fmt: skip
     mean = mean_scores(dice, scores)
     groups = {"the paper's die and the shared dice": [d for d in dice if not d.name.startswith("cuboid-")],
@@ -214,24 +218,28 @@ def guard(args) -> None:
         if group:
             m = mean_scores(group, scores)
             print(f"mean, {label} ({len(group)}): " + ", ".join(f"{c} {m[c]:.4f}" for c in columns))
-    print(f"{'mean':<13} {'':>5} {'':>8} " + " ".join(f"{mean[c]:>11.4f}" for c in columns))
-    print(f"\nTVD to the real counts; validate: {args.sims} drops per die, seed {args.seed}, default physics, "
+    print(f"{'mean':<13} {'':>5} {'':>8} " + " ".join(f"{mean[c]:>13.4f}" for c in columns))
+    print(f"\nTVD to the real counts; validate: {args.sims} drops per die, seed {args.seed}, default physics "
+          f"and each shipped profile fitted on real dice ({', '.join(profiles)}), "
           f"{time.perf_counter() - started:.0f} s ({os.cpu_count()} cores, shared machine)")  # fmt: skip
     if GUARD.is_file():
         old = json.loads(GUARD.read_text())
         print("recorded: " + ", ".join(f"{c} {old['mean'][c]:.4f}" for c in columns if c in old["mean"]))
     if args.record:
         from diefab.core.files import atomic_write
+        from diefab.physics.profiles import load_profile
         from diefab.physics.simulate import PhysicsSettings
 
-        data = {"tolerance": GUARD_TOLERANCE, "drops": args.sims, "seed": args.seed,
+        data = {"tolerance": GUARD_TOLERANCE, "drops": args.sims, "seed": args.seed, "profiles": profiles,
                 "dice": [d.name for d in dice], "mean": {c: round(mean[c], 5) for c in columns},
                 "per_die": {d.name: {c: round(scores[d.name][c], 5) for c in columns} for d in dice},
                 "command": f"python benchmarks/bench_realrolls.py --guard --sims {args.sims} --seed {args.seed} "
                            "--record"}  # fmt: skip
         atomic_write(GUARD, json.dumps(data, indent=1) + "\n")
         # the cache keeps only this run's simulations: entries of older code can never be read again
-        used = {simulation_key(d, PhysicsSettings.from_mapping(d.design.physics), args.sims, args.seed) for d in dice}
+        settings = [lambda d: PhysicsSettings.from_mapping(d.design.physics)]
+        settings += [lambda d, p=p: load_profile(p, base=d.design.physics) for p in profiles]
+        used = {simulation_key(d, at(d), args.sims, args.seed) for d in dice for at in settings}
         atomic_write(SIM_CACHE, json.dumps({k: v for k, v in cache.entries.items() if k in used}, indent=0,
                                            sort_keys=True) + "\n")  # fmt: skip
         print(f"recorded in {GUARD.relative_to(ROOT)}")

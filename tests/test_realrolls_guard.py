@@ -1,4 +1,4 @@
-"""Every landing model and the simulation hold their recorded figures on every die with real rolls.
+"""Every landing model, the simulation and every shipped profile fitted on real dice hold their figures on real dice.
 
 The figures (mean TVD to the real rolls over the paper's die and the
 real-rolls data) are recorded by ``python benchmarks/bench_realrolls.py
@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from diefab.physics.profiles import fitted_profiles, load_profile
 from diefab.search.fidelity import LANDING_MODELS, SimulationCache, load_real_dice, model_tvd, simulated_tvd, value_tvd
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -53,13 +54,33 @@ def test_landing_model_is_no_worse_on_real_dice_than_recorded(dice, recorded, mo
     assert mean <= recorded["mean"][model] + recorded["tolerance"], f"{model}: mean TVD {mean:.4f}, per die {worse}"
 
 
-def test_simulation_is_no_worse_on_real_dice_than_recorded(dice, recorded):
+@pytest.fixture(scope="module")
+def sim_cache():
     cache = SimulationCache(None)
     if SIM_CACHE.is_file():
         cache.entries = dict(json.loads(SIM_CACHE.read_text()))  # read only: the test never writes the repository
-    tvds = [simulated_tvd(d, drops=recorded["drops"], seed=recorded["seed"], cache=cache, workers=2) for d in dice]
+    return cache
+
+
+def test_simulation_is_no_worse_on_real_dice_than_recorded(dice, recorded, sim_cache):
+    tvds = [simulated_tvd(d, drops=recorded["drops"], seed=recorded["seed"], cache=sim_cache, workers=2) for d in dice]
     mean = float(np.mean(tvds))
     assert mean <= recorded["mean"]["validate"] + recorded["tolerance"], f"validate: mean TVD {mean:.4f}"
+
+
+def test_every_shipped_profile_fitted_on_real_dice_is_guarded(recorded):
+    assert sorted(recorded.get("profiles", [])) == fitted_profiles()
+
+
+@pytest.mark.parametrize("profile", fitted_profiles())
+def test_shipped_profile_is_no_worse_on_real_dice_than_recorded(dice, recorded, sim_cache, profile):
+    column = f"validate --profile {profile}"
+    if column not in recorded["mean"]:
+        pytest.fail(f"no recorded figures for the shipped profile {profile!r}: run {recorded['command']}")
+    tvds = [simulated_tvd(d, load_profile(profile, base=d.design.physics), drops=recorded["drops"],
+                          seed=recorded["seed"], cache=sim_cache, workers=2) for d in dice]  # fmt: skip
+    mean = float(np.mean(tvds))
+    assert mean <= recorded["mean"][column] + recorded["tolerance"], f"{column}: mean TVD {mean:.4f}"
 
 
 def test_the_fast_model_is_no_worse_than_the_chain_it_corrects_on_real_dice(dice):

@@ -35,6 +35,7 @@ PROFILE_MAX_BYTES = 1 << 20
 __all__ = [
     "PROFILE_KEYS",
     "STANDARD",
+    "fitted_profiles",
     "list_profiles",
     "load_profile",
     "profile_to_toml",
@@ -60,6 +61,11 @@ def list_profiles() -> list[str]:
     if not folder.is_dir():
         return []
     return sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml"))
+
+
+def fitted_profiles() -> list[str]:
+    """Names of the shipped profiles fitted on real dice (those with a ``[calibration]`` table), sorted."""
+    return [name for name in list_profiles() if "calibration" in read_profile(name)[0]]
 
 
 def read_profile(spec) -> tuple[dict[str, Any], str]:

@@ -205,11 +205,22 @@ def mean_scores(dice: Sequence[RealDie], scores: Mapping[str, Mapping[str, float
 
 
 def guard_scores(dice: Sequence[RealDie], *, drops: int, seed: int, cache: SimulationCache | None,
-                 workers: int | None = 1) -> dict[str, Any]:  # fmt: skip
-    """Per die and landing model (and ``validate``, the simulation at default physics), the TVD to real rolls."""
+                 workers: int | None = 1, profiles: Sequence[str] = ()) -> dict[str, Any]:  # fmt: skip
+    """Per die, the TVD to its real rolls of each landing model, of ``validate`` and of ``validate --profile P``.
+
+    ``validate`` is the simulation at the die's own physics (the defaults
+    for these dice); ``validate --profile P`` the simulation under each of
+    `profiles` (shipped names or files) over the die's physics.
+    """
+    from diefab.physics.profiles import load_profile
+
     out: dict[str, dict[str, float]] = {}
     for die in dice:
         row = {m: model_tvd(die, m) for m in LANDING_MODELS}
         row["validate"] = simulated_tvd(die, drops=drops, seed=seed, cache=cache, workers=workers)
+        for name in profiles:
+            settings = load_profile(name, base=die.design.physics)
+            row[f"validate --profile {name}"] = simulated_tvd(die, settings, drops=drops, seed=seed, cache=cache,
+                                                              workers=workers)  # fmt: skip
         out[die.name] = row
     return out
