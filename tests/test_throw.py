@@ -6,7 +6,7 @@ import pytest
 
 from diefab.core.errors import PhysicsError
 from diefab.physics.simulate import PhysicsSettings
-from diefab.physics.throw import GENTLE, HARD, VIGOROUS, throw_settings
+from diefab.physics.throw import GENTLE, HARD, MAX_VIGOR, VIGOROUS, throw_settings
 
 
 def test_vigor_one_is_the_default_throw_and_zero_the_gentle_release():
@@ -41,9 +41,14 @@ def test_past_one_the_throw_moves_linearly_on_to_the_hard_end():
         assert getattr(s, field) == pytest.approx(0.75 * VIGOROUS[key] + 0.25 * HARD[key])
     # the two pieces meet at the default throw
     assert throw_settings(1.0 + 1e-9).drop_height == pytest.approx(throw_settings(1.0 - 1e-9).drop_height)
+    # and past the hard end the same line goes on: as far past HARD at 3 as HARD is past the default
+    top = throw_settings(MAX_VIGOR)
+    for key in ("restitution", "drop_height", "height_jitter"):
+        assert getattr(top, key) == pytest.approx(2 * HARD[key] - VIGOROUS[key])
+    assert top.angular_velocity[1] == pytest.approx(2 * HARD["spin"] - VIGOROUS["spin"]) and top.restitution < 1
 
 
-@pytest.mark.parametrize("bad", [-0.1, 2.5, float("nan"), "1", True, None])
-def test_vigor_outside_zero_one_is_refused(bad):
+@pytest.mark.parametrize("bad", [-0.1, 3.5, float("inf"), float("nan"), "1", True, None])
+def test_vigor_outside_its_range_is_refused(bad):
     with pytest.raises(PhysicsError, match="vigor"):
         throw_settings(bad)

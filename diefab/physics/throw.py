@@ -8,8 +8,11 @@ paper's throw: a drop from about 5 units with up to 10 rad/s of spin, on a
 table of restitution 0.3 and friction 0.8.  Neither is "right": real
 throws lie somewhere between, and how a die is thrown matters as much as
 the table.  :func:`throw_settings` spans the two with one number, the
-throw's *vigor* ``v`` in [0, 1], every setting moving linearly between its
-two ends (:data:`GENTLE` at 0, :data:`VIGOROUS`, the defaults, at 1).
+throw's *vigor* ``v`` in [0, 3], every setting moving linearly between its
+two ends (:data:`GENTLE` at 0, :data:`VIGOROUS`, the defaults, at 1), and
+past 1 on along the line through the defaults and :data:`HARD` (vigor 2):
+at 3, a drop from 15 units with up to 30 rad/s of spin on a table of
+restitution 0.9.
 
 The gentle end is released :data:`GENTLE_HEIGHT` units up (centre of
 mass), clear of the table for every die whose radius (largest distance
@@ -50,12 +53,12 @@ VIGOROUS = {"restitution": 0.3, "friction": 0.8, "drop_height": 5.0, "height_jit
 #: The settings at vigor 2: a hard throw, from twice the height with twice the spin, on a bouncier table.
 HARD = {"restitution": 0.6, "friction": 0.8, "drop_height": 10.0, "height_jitter": 1.0, "spin": 20.0}
 
-#: The largest vigor (:data:`HARD`).
-MAX_VIGOR = 2.0
+#: The largest vigor: the line through :data:`VIGOROUS` and :data:`HARD` extended as far again (restitution 0.9).
+MAX_VIGOR = 3.0
 
 
 def throw_settings(vigor: float, base: PhysicsSettings | None = None) -> PhysicsSettings:
-    """Physics settings of a throw of `vigor` in [0, 2] (see the module docstring) over `base` (default settings).
+    """Physics settings of a throw of `vigor` in [0, 3] (see the module docstring) over `base` (default settings).
 
     ``spin`` is the upper end of the initial spin range (``angular_velocity``,
     rad/s, from 0); every other setting of `base` is kept.
@@ -63,7 +66,7 @@ def throw_settings(vigor: float, base: PhysicsSettings | None = None) -> Physics
     Raises
     ------
     PhysicsError
-        `vigor` is not a number in [0, 2].
+        `vigor` is not a number in [0, 3].
     """
     if isinstance(vigor, bool) or not isinstance(vigor, (int, float)) or not 0.0 <= vigor <= MAX_VIGOR:
         raise PhysicsError(f"vigor={vigor!r} must be a number in [0, {MAX_VIGOR:g}]")
