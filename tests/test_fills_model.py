@@ -146,3 +146,24 @@ def test_the_optimizer_scores_a_card_die_with_the_fill_aware_model():
     assert np.allclose(values, expected, atol=1e-12)
     solid_trained = to_values(d, fast_model(d.polyhedron, body.center))
     assert not np.allclose(values, solid_trained, atol=1e-4)
+
+
+def test_the_written_by_line_of_a_design_makes_the_same_die_again(run, tmp_path):
+    """Every setting that shapes the design (the fill's included) is in its header, so the header reproduces it."""
+    import shlex
+
+    first = tmp_path / "first"
+    code, _, err = run("design", "4df", "--model", "fast", "--validate-sims", "0", "--fill", "print", "--infill",
+                       "0.3", "--min-margin", "0.04", "--out", first)  # fmt: skip
+    assert code == 0, err
+    (path,) = first.glob("*.toml")
+    header = path.read_text().splitlines()[0]
+    assert header.startswith("# Written by: diefab design ")
+    assert "--infill 0.3" in header and "--min-margin 0.04" in header
+    again = tmp_path / "again"
+    code, _, err = run(*shlex.split(header.removeprefix("# Written by: diefab ")), "--validate-sims", "0",
+                       "--out", again)  # fmt: skip
+    assert code == 0, err
+    a, b = load_design(path), load_design(again / path.name)
+    assert a.fill == b.fill == Fill("print", infill=0.3)
+    np.testing.assert_allclose(a.polyhedron.vertices, b.polyhedron.vertices, atol=1e-12)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+import shlex
 import time
 from pathlib import Path
 
@@ -158,8 +159,12 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
         f"by diefab design: {_METHOD[found.method]} "
         f"({found.model} model, seed {seed})",
     )
-    how = (f" --physics {physics_profile}" if physics_profile else "") + (" --robust" if robust else "")
-    how += " --flat-faces" if flat_faces else ""
+    given = {"size_mm": "--size", "min_margin": "--min-margin", "tolerance": "--tolerance"}
+    how = "".join(f" --{k.replace('_', '-')} {v}" for k, v in fill_settings.items() if v is not None)
+    how += "".join(f" {flag} {ctx.params[k]}" for k, flag in given.items()
+                   if ctx.get_parameter_source(k) is not click.core.ParameterSource.DEFAULT)  # fmt: skip
+    how += f" --physics {shlex.quote(str(physics_profile))}" if physics_profile else ""
+    how += (" --robust" if robust else "") + (" --flat-faces" if flat_faces else "")
     how += (f" --family {family_name}" if family_name != "auto" else "") + (f" --faces {faces}" if faces else "")
     path = atomic_write(
         output_path(out_dir, d.name, ".toml"),
