@@ -9,7 +9,8 @@ The throw is one number, its vigor (:func:`diefab.physics.throw.throw_settings`)
 default), 2 a hard throw (twice the height and spin, a bouncier table), 3
 as far again.  The table's quasi-static capture (``capture_energy``: a die
 with less energy than this above rest stays in the basin it is in) is a
-second axis, ``--capture``.  Every die is simulated at every candidate
+second axis, ``--capture``; ``--flat-faces`` holds the faces a die rests on
+flat (``flat_faces``) at every candidate.  Every die is simulated at every candidate
 (``--drops`` drops, seed ``--seed``; cached with the other held-out
 benchmarks in ``benchmarks/results/calibrate_loo_cache.jsonl``).  Two
 sets of real dice:
@@ -68,6 +69,7 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--vigor", default="0.5,1,1.5,2", help="the candidates' vigor, comma-separated (1 must be one)")
     ap.add_argument("--capture", default="0", help="the candidates' capture energy (m g L), comma-separated (0 one)")
+    ap.add_argument("--flat-faces", action="store_true", help="hold the resting faces flat (flat_faces)")
     ap.add_argument("--drops", type=int, default=1000, help="simulated drops per die and candidate")
     ap.add_argument("--seed", type=int, default=3)
     ap.add_argument(
@@ -100,7 +102,8 @@ def main() -> int:
     probs = np.zeros((len(dice), len(cands)), dtype=object)
     for k, (v, cap) in enumerate(cands):
         for i, d in enumerate(dice):
-            c = sims.counts_at(d, throw_settings(v, PhysicsSettings(capture_energy=cap)), args.drops, args.seed)
+            base = PhysicsSettings(capture_energy=cap, flat_faces=args.flat_faces)
+            c = sims.counts_at(d, throw_settings(v, base), args.drops, args.seed)
             freq[i, k], probs[i, k] = c / c.sum(), d.symmetrized(smoothed(c))
         print(f"  {label(v, cap)}: simulated  ({time.perf_counter() - started:.0f} s)", flush=True)
     shutdown_pool()
@@ -143,8 +146,9 @@ def main() -> int:
     noise = [noise_tvd(d) for d in dice]
 
     print(f"\nTVD to the real rolls, each die scored on its own {args.drops} drops (seed {args.seed}); "
-          f"candidates: vigor {args.vigor} x capture {args.capture}; prior sd {args.prior:g} toward vigor 1 "
-          f"without capture; perfect: a perfect model at {args.drops} drops")  # fmt: skip
+          f"candidates: vigor {args.vigor} x capture {args.capture}{', flat faces' * args.flat_faces}; "
+          f"prior sd {args.prior:g} toward vigor 1 without capture; perfect: a perfect model at "
+          f"{args.drops} drops")  # fmt: skip
     for heading, rows in (("the eight", sets[0]), ("the published cuboids", sets[1])):
         print(f"\n{heading}:")
         shown = [c for c in columns if not np.isnan([columns[c][i] for i in rows]).all()]  # the source's, where given
