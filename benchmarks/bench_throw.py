@@ -148,9 +148,8 @@ def main() -> int:
         "mix loo": lambda rows, i, among: mix(rows, among),
         "hier": hier,
     }
-    rules = {name: (lambda i, m=m: m([j for j in range(len(dice)) if j != i], i, everyone))
-             for name, m in methods.items()}  # fmt: skip
-    weights = {name: [rule(i) for i in range(len(dice))] for name, rule in rules.items()}
+    weights = {name: [m([j for j in range(len(dice)) if j != i], i, everyone) for i in range(len(dice))]
+               for name, m in methods.items()}  # fmt: skip
     # the nested score: which rule, over which part of the grid, is itself chosen without the held-out die
     grids = {"": everyone, " vigor<=2": np.array([v <= 2.0 for v, c in cands]),
              " no capture": np.array([c == 0.0 for v, c in cands])}  # fmt: skip
@@ -159,7 +158,6 @@ def main() -> int:
         len(dice), {name + g: (lambda rows, i, m=m, among=among: m(list(rows), i, among))
                     for name, m in methods.items() for g, among in grids.items()},
         lambda j, w: value_tvd(dice[j], sum(w[k] * freq[j, k] for k in range(len(cands)))))  # fmt: skip
-    rules["nested"] = None
     weights["nested"] = [w for _, w, _ in choices]
     columns = {"perfect": [perfect_tvd(d, args.drops) for d in dice]}
     shown = [k for k, (v, cap) in enumerate(cands) if cap == 0.0]  # the capture columns would not fit a page
@@ -180,16 +178,16 @@ def main() -> int:
         shown = [c for c in columns if not np.isnan([columns[c][i] for i in rows]).all()]  # the source's, where given
         table([dice[i] for i in rows], {c: [columns[c][i] for i in rows] for c in shown}, [noise[i] for i in rows])
         mean_noise = np.mean([noise[i] for i in rows])
-        for name in ("perfect", label(*cands[default]), *rules):
+        for name in ("perfect", label(*cands[default]), *weights):
             m = np.nanmean([columns[name][i] for i in rows])
             print(f"  {name:<11} mean {m:.4f} = {m / mean_noise:.2f}x the noise")
-        for name in rules:
+        for name in weights:
             chosen = [chosen_label(weights[name][i], cands) for i in rows]
             print(f"  {name:<11} chosen per die: " + ", ".join(f"{dice[i].name} {c}" for i, c in zip(rows, chosen)))
         print("  nested      method per die: " + ", ".join(f"{dice[i].name} {choices[i][0]}" for i in rows))
     print("\ngoal checks on the eight:")
     rows = sets[0]
-    for name in rules:
+    for name in weights:
         goal([dice[i] for i in rows], [columns[name][i] for i in rows],
              [columns[label(*cands[default])][i] for i in rows], [noise[i] for i in rows], name)  # fmt: skip
     print(f"\n({time.perf_counter() - started:.0f} s)")
