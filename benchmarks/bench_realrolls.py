@@ -27,8 +27,8 @@ With ``--guard`` it computes, in this process, the figures the real-dice
 guard test (``tests/test_realrolls_guard.py``) checks: each landing model's
 TVD per die and ``validate`` at ``--sims`` drops (seed ``--seed``), at the
 default physics and under each shipped profile fitted on real dice
-(:func:`diefab.physics.profiles.fitted_profiles`), simulated counts cached in ``benchmarks/results/
-realrolls-sim-cache.json`` under a key of the design, settings, drops, seed
+(:func:`diefab.physics.profiles.fitted_profiles`), simulated counts cached
+in ``benchmarks/results/realrolls-sim-cache.json`` under a key of the design, settings, drops, seed
 and the simulation's code; ``--record`` writes their means over the dice
 to ``benchmarks/results/realrolls-guard.json``, the figures the test
 holds every model to (worse by more than ``tolerance`` fails).
@@ -61,6 +61,7 @@ from diefab.search.fidelity import (
     TABLE_2,
     SimulationCache,
     guard_scores,
+    guard_settings,
     load_real_dice,
     mean_scores,
     noise_tvd,
@@ -227,8 +228,6 @@ def guard(args) -> None:
         print("recorded: " + ", ".join(f"{c} {old['mean'][c]:.4f}" for c in columns if c in old["mean"]))
     if args.record:
         from diefab.core.files import atomic_write
-        from diefab.physics.profiles import load_profile
-        from diefab.physics.simulate import PhysicsSettings
 
         data = {"tolerance": GUARD_TOLERANCE, "drops": args.sims, "seed": args.seed, "profiles": profiles,
                 "dice": [d.name for d in dice], "mean": {c: round(mean[c], 5) for c in columns},
@@ -237,9 +236,8 @@ def guard(args) -> None:
                            "--record"}  # fmt: skip
         atomic_write(GUARD, json.dumps(data, indent=1) + "\n")
         # the cache keeps only this run's simulations: entries of older code can never be read again
-        settings = [lambda d: PhysicsSettings.from_mapping(d.design.physics)]
-        settings += [lambda d, p=p: load_profile(p, base=d.design.physics) for p in profiles]
-        used = {simulation_key(d, at(d), args.sims, args.seed) for d in dice for at in settings}
+        used = {simulation_key(d, settings, args.sims, args.seed) for d in dice
+                for settings in guard_settings(d, profiles).values()}  # fmt: skip
         atomic_write(SIM_CACHE, json.dumps({k: v for k, v in cache.entries.items() if k in used}, indent=0,
                                            sort_keys=True) + "\n")  # fmt: skip
         print(f"recorded in {GUARD.relative_to(ROOT)}")

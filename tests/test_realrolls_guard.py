@@ -18,8 +18,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from diefab.physics.profiles import fitted_profiles, load_profile
-from diefab.search.fidelity import LANDING_MODELS, SimulationCache, load_real_dice, model_tvd, simulated_tvd, value_tvd
+from diefab.physics.profiles import fitted_profiles
+from diefab.search.fidelity import (
+    LANDING_MODELS,
+    SimulationCache,
+    guard_settings,
+    load_real_dice,
+    model_tvd,
+    simulated_tvd,
+    value_tvd,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 REALROLLS = ROOT / ".." / "shared" / "realrolls"
@@ -63,7 +71,8 @@ def sim_cache():
 
 
 def test_simulation_is_no_worse_on_real_dice_than_recorded(dice, recorded, sim_cache):
-    tvds = [simulated_tvd(d, drops=recorded["drops"], seed=recorded["seed"], cache=sim_cache, workers=2) for d in dice]
+    tvds = [simulated_tvd(d, guard_settings(d)["validate"], drops=recorded["drops"], seed=recorded["seed"],
+                          cache=sim_cache, workers=2) for d in dice]  # fmt: skip
     mean = float(np.mean(tvds))
     assert mean <= recorded["mean"]["validate"] + recorded["tolerance"], f"validate: mean TVD {mean:.4f}"
 
@@ -77,8 +86,8 @@ def test_shipped_profile_is_no_worse_on_real_dice_than_recorded(dice, recorded, 
     column = f"validate --profile {profile}"
     if column not in recorded["mean"]:
         pytest.fail(f"no recorded figures for the shipped profile {profile!r}: run {recorded['command']}")
-    tvds = [simulated_tvd(d, load_profile(profile, base=d.design.physics), drops=recorded["drops"],
-                          seed=recorded["seed"], cache=sim_cache, workers=2) for d in dice]  # fmt: skip
+    tvds = [simulated_tvd(d, guard_settings(d, [profile])[column], drops=recorded["drops"], seed=recorded["seed"],
+                          cache=sim_cache, workers=2) for d in dice]  # fmt: skip
     mean = float(np.mean(tvds))
     assert mean <= recorded["mean"][column] + recorded["tolerance"], f"{column}: mean TVD {mean:.4f}"
 

@@ -37,8 +37,8 @@ def test_past_one_the_throw_moves_linearly_on_to_the_hard_end():
         (0.0, HARD["spin"]),
     )
     s = throw_settings(1.25)
-    for field, key in (("restitution", "restitution"), ("drop_height", "drop_height"), ("friction", "friction")):
-        assert getattr(s, field) == pytest.approx(0.75 * VIGOROUS[key] + 0.25 * HARD[key])
+    for key in ("restitution", "drop_height", "friction"):
+        assert getattr(s, key) == pytest.approx(0.75 * VIGOROUS[key] + 0.25 * HARD[key])
     # the two pieces meet at the default throw
     assert throw_settings(1.0 + 1e-9).drop_height == pytest.approx(throw_settings(1.0 - 1e-9).drop_height)
     # and past the hard end the same line goes on: as far past HARD at 3 as HARD is past the default

@@ -41,6 +41,7 @@ __all__ = [
     "TABLE_2",
     "SimulationCache",
     "guard_scores",
+    "guard_settings",
     "load_real_dice",
     "mean_scores",
     "model_tvd",
@@ -204,23 +205,27 @@ def mean_scores(dice: Sequence[RealDie], scores: Mapping[str, Mapping[str, float
     return {c: float(np.mean([scores[d.name][c] for d in dice])) for c in columns}
 
 
-def guard_scores(dice: Sequence[RealDie], *, drops: int, seed: int, cache: SimulationCache | None,
-                 workers: int | None = 1, profiles: Sequence[str] = ()) -> dict[str, Any]:  # fmt: skip
-    """Per die, the TVD to its real rolls of each landing model, of ``validate`` and of ``validate --profile P``.
+def guard_settings(die: RealDie, profiles: Sequence[str] = ()) -> dict[str, Any]:
+    """The physics of each simulated column of the guard for `die`: ``validate`` and ``validate --profile P``.
 
     ``validate`` is the simulation at the die's own physics (the defaults
     for these dice); ``validate --profile P`` the simulation under each of
     `profiles` (shipped names or files) over the die's physics.
     """
     from diefab.physics.profiles import load_profile
+    from diefab.physics.simulate import PhysicsSettings
 
+    columns = {"validate": PhysicsSettings.from_mapping(die.design.physics)}
+    return columns | {f"validate --profile {p}": load_profile(p, base=die.design.physics) for p in profiles}
+
+
+def guard_scores(dice: Sequence[RealDie], *, drops: int, seed: int, cache: SimulationCache | None,
+                 workers: int | None = 1, profiles: Sequence[str] = ()) -> dict[str, Any]:  # fmt: skip
+    """Per die, the TVD to its real rolls of each landing model and each simulated column (:func:`guard_settings`)."""
     out: dict[str, dict[str, float]] = {}
     for die in dice:
         row = {m: model_tvd(die, m) for m in LANDING_MODELS}
-        row["validate"] = simulated_tvd(die, drops=drops, seed=seed, cache=cache, workers=workers)
-        for name in profiles:
-            settings = load_profile(name, base=die.design.physics)
-            row[f"validate --profile {name}"] = simulated_tvd(die, settings, drops=drops, seed=seed, cache=cache,
-                                                              workers=workers)  # fmt: skip
+        for column, settings in guard_settings(die, profiles).items():
+            row[column] = simulated_tvd(die, settings, drops=drops, seed=seed, cache=cache, workers=workers)
         out[die.name] = row
     return out
