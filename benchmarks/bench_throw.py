@@ -137,6 +137,10 @@ def main() -> int:
         population = coords[int(np.argmax(grid(rows, among=among)))]
         return grid([j for j in rows if surfaces[j] == surfaces[i]], population, among)
 
+    def scored(i: int, w: np.ndarray) -> float:
+        """TVD of die `i`'s real rolls to its own simulated drops under the candidate weights `w`."""
+        return value_tvd(dice[i], sum(w[k] * freq[i, k] for k in range(len(cands))))
+
     def in_set(i: int) -> int:
         return 0 if i in sets[0] else 1
 
@@ -157,14 +161,13 @@ def main() -> int:
     choices = nested_choices(
         len(dice), {name + g: (lambda rows, i, m=m, among=among: m(list(rows), i, among))
                     for name, m in methods.items() for g, among in grids.items()},
-        lambda j, w: value_tvd(dice[j], sum(w[k] * freq[j, k] for k in range(len(cands)))))  # fmt: skip
+        scored)  # fmt: skip
     weights["nested"] = [w for _, w, _ in choices]
     columns = {"perfect": [perfect_tvd(d, args.drops) for d in dice]}
     shown = [k for k, (v, cap) in enumerate(cands) if cap == 0.0]  # the capture columns would not fit a page
     columns |= {label(*cands[k]): [value_tvd(d, freq[i, k]) for i, d in enumerate(dice)] for k in shown}
     for name, ws in weights.items():
-        columns[name] = [value_tvd(d, sum(w[k] * freq[i, k] for k in range(len(cands)))) for i, (d, w) in
-                         enumerate(zip(dice, ws))]  # fmt: skip
+        columns[name] = [scored(i, w) for i, w in enumerate(ws)]
     columns |= {k: [value_tvd(d, d.reference[k]) if k in d.reference else np.nan for d in dice]
                 for k in ("ours", "bullet")}  # fmt: skip
     noise = [noise_tvd(d) for d in dice]
