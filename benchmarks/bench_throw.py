@@ -3,10 +3,10 @@
     nice -n 10 python benchmarks/bench_throw.py --workers 2 | tee benchmarks/results/bench_throw.txt
     nice -n 10 python benchmarks/bench_throw.py --workers 2 --vigor 1,1.5,2,2.5,3 \
         --capture 0,0.01,0.04,0.09,0.16,0.25,0.36,0.64,1 | tee benchmarks/results/bench_throw_capture.txt
+    nice -n 10 python benchmarks/bench_throw.py --workers 2 --rest fast | tee benchmarks/results/bench_throw_rest.txt
 
-(The first prints in under a minute from the cache; the second takes about
-half an hour on 2 cores, most of it the nested score refitting mixtures of
-45 candidates some 1,500 times.)
+(Each prints from the cache in under a minute to five minutes, most of it
+the nested score refitting mixtures of up to 47 candidates.)
 
 The throw is one number, its vigor (:func:`diefab.physics.throw.throw_settings`):
 0.5 halfway from the source's gentle release, 1 the paper's drop (the
@@ -14,7 +14,11 @@ default), 2 a hard throw (twice the height and spin, a bouncier table), 3
 as far again.  The table's quasi-static capture (``capture_energy``: a die
 with less energy than this above rest stays in the basin it is in) is a
 second axis, ``--capture``; ``--flat-faces`` holds the faces a die rests on
-flat (``flat_faces``) at every candidate.  Every die is simulated at every candidate
+flat (``flat_faces``) at every candidate.  ``--rest MODEL`` adds a landing model
+(``fast``, ``basins``: what ``diefab predict`` gives) as one more candidate, the
+quasi-static limit of the gentlest throw: its probabilities are weighted as if
+drawn from ``--drops`` drops, and the prior places it at vigor 0 on a table
+that keeps every die (capture 1).  Every die is simulated at every candidate
 (``--drops`` drops, seed ``--seed``; cached with the other held-out
 benchmarks in ``benchmarks/results/calibrate_loo_cache.jsonl``).  Two
 sets of real dice:
@@ -42,7 +46,7 @@ choice.  Rules, none of which sees the die it scores:
   candidate, which alone decides for a die with no other die on its
   surface;
 - ``nested``: the rule, and the part of the grid it chooses among (all;
-  vigor up to 2; no capture), chosen for each die by an inner
+  vigor up to 2; no capture; no landing model), chosen for each die by an inner
   leave-one-out over the other 22 dice
   (:func:`diefab.search.crossval.nested_choices`, inner loss the TVD on
   their own drops): the held-out score of choosing, too.
@@ -65,13 +69,20 @@ from bench_calibrate import Simulations  # noqa: E402
 from bench_heldout import CACHE, REALROLLS, perfect_tvd, surface, table  # noqa: E402
 from bench_mixture import goal  # noqa: E402
 
+from diefab.models.probabilities import value_probabilities  # noqa: E402
 from diefab.physics.simulate import PhysicsSettings, shutdown_pool  # noqa: E402
 from diefab.physics.throw import MAX_VIGOR, throw_settings  # noqa: E402
 from diefab.search.crossval import nested_choices, pick_candidate  # noqa: E402
-from diefab.search.fidelity import load_real_dice, noise_tvd, value_tvd  # noqa: E402
+from diefab.search.fidelity import LANDING_MODELS, load_real_dice, noise_tvd, value_tvd  # noqa: E402
 from diefab.search.likelihood import deviance, smoothed  # noqa: E402
 from diefab.search.mixture import fit_weights, prior_penalty  # noqa: E402
 from diefab.search.published import square_cuboid_dice  # noqa: E402
+
+#: A landing-model candidate's "vigor" (its capture slot holds the model's name).
+REST = -1.0
+#: Its coordinates for the prior: the gentlest throw (vigor 0) on a table that keeps every die
+#: in the first basin it rests in (capture 1), the quasi-static limit these models assume.
+REST_COORDS = (0.0, 1.0)
 
 
 def main() -> int:
@@ -79,6 +90,7 @@ def main() -> int:
     ap.add_argument("--vigor", default="0.5,1,1.5,2", help="the candidates' vigor, comma-separated (1 must be one)")
     ap.add_argument("--capture", default="0", help="the candidates' capture energy (m g L), comma-separated (0 one)")
     ap.add_argument("--flat-faces", action="store_true", help="hold the resting faces flat (flat_faces)")
+    ap.add_argument("--rest", default="", help="landing models as candidates too, comma-separated (basins, fast)")
     ap.add_argument("--drops", type=int, default=1000, help="simulated drops per die and candidate")
     ap.add_argument("--seed", type=int, default=3)
     ap.add_argument(
@@ -96,7 +108,10 @@ def main() -> int:
         raise SystemExit(f"--vigor {args.vigor!r} must include 1 and --capture {args.capture!r} 0: the defaults")
     if not all(0 <= v <= MAX_VIGOR for v in vigor) or not all(0 <= c <= 1 for c in capture):
         raise SystemExit(f"--vigor in [0, {MAX_VIGOR:g}] and --capture in [0, 1]")
-    cands = [(v, c) for v in vigor for c in capture]
+    rest = [m for m in args.rest.split(",") if m]
+    if not set(rest) <= set(LANDING_MODELS):
+        raise SystemExit(f"--rest {args.rest!r}: landing models among {', '.join(LANDING_MODELS)}")
+    cands = [(v, c) for v in vigor for c in capture] + [(REST, m) for m in rest]
     if not args.data.is_dir():
         raise SystemExit(f"no real-rolls folder {args.data}")
     if not args.prior > 0:
@@ -110,13 +125,20 @@ def main() -> int:
     freq = np.zeros((len(dice), len(cands)), dtype=object)
     probs = np.zeros((len(dice), len(cands)), dtype=object)
     for k, (v, cap) in enumerate(cands):
+        if v == REST:  # the landing model's probabilities, weighted as if drawn from as many drops
+            for i, d in enumerate(dice):
+                p = value_probabilities(d.design, cap)
+                freq[i, k], probs[i, k] = p, d.symmetrized(smoothed(p * args.drops))
+            print(f"  {label(v, cap)}: predicted  ({time.perf_counter() - started:.0f} s)", flush=True)
+            continue
         for i, d in enumerate(dice):
             base = PhysicsSettings(capture_energy=cap, flat_faces=args.flat_faces)
             c = sims.counts_at(d, throw_settings(v, base), args.drops, args.seed)
             freq[i, k], probs[i, k] = c / c.sum(), d.symmetrized(smoothed(c))
         print(f"  {label(v, cap)}: simulated  ({time.perf_counter() - started:.0f} s)", flush=True)
     shutdown_pool()
-    coords, x0 = np.array([(v, np.sqrt(c)) for v, c in cands]), np.array([1.0, 0.0])
+    coords = np.array([REST_COORDS if v == REST else (v, np.sqrt(c)) for v, c in cands])
+    x0 = np.array([1.0, 0.0])
     dev = np.array([[deviance(d.counts, probs[i, k]) for k in range(len(cands))] for i, d in enumerate(dice)])
     default = cands.index((1.0, 0.0))
 
@@ -127,11 +149,17 @@ def main() -> int:
         w[ks[pick_candidate(dev[:, ks], train, coords[ks], centre, args.prior)]] = 1.0
         return w
 
+    mixtures: dict[tuple[frozenset[int], bytes], np.ndarray] = {}  # the nested score refits the same sets twice
+
     def mix(train: list[int], among: np.ndarray = everyone) -> np.ndarray:
-        w, ks = np.zeros(len(cands)), np.flatnonzero(among)
-        penalty = prior_penalty(coords[ks], x0, args.prior)
-        w[ks] = fit_weights([dice[j].counts for j in train], [np.array(list(probs[j, ks])) for j in train], penalty)
-        return w
+        key = (frozenset(train), among.tobytes())
+        if key not in mixtures:
+            w, ks = np.zeros(len(cands)), np.flatnonzero(among)
+            penalty = prior_penalty(coords[ks], x0, args.prior)
+            w[ks] = fit_weights([dice[j].counts for j in train], [np.array(list(probs[j, ks])) for j in train],
+                                penalty)  # fmt: skip
+            mixtures[key] = w
+        return mixtures[key]
 
     def hier(rows: list[int], i: int, among: np.ndarray = everyone) -> np.ndarray:
         population = coords[int(np.argmax(grid(rows, among=among)))]
@@ -156,7 +184,8 @@ def main() -> int:
                for name, m in methods.items()}  # fmt: skip
     # the nested score: which rule, over which part of the grid, is itself chosen without the held-out die
     grids = {"": everyone, " vigor<=2": np.array([v <= 2.0 for v, c in cands]),
-             " no capture": np.array([c == 0.0 for v, c in cands])}  # fmt: skip
+             " no capture": np.array([c == 0.0 for v, c in cands]),
+             " no rest": np.array([v != REST for v, c in cands])}  # fmt: skip
     grids = {g: among for g, among in grids.items() if g == "" or not among.all()}
     choices = nested_choices(
         len(dice), {name + g: (lambda rows, i, m=m, among=among: m(list(rows), i, among))
@@ -164,7 +193,7 @@ def main() -> int:
         scored)  # fmt: skip
     weights["nested"] = [w for _, w, _ in choices]
     columns = {"perfect": [perfect_tvd(d, args.drops) for d in dice]}
-    shown = [k for k, (v, cap) in enumerate(cands) if cap == 0.0]  # the capture columns would not fit a page
+    shown = [k for k, (v, cap) in enumerate(cands) if cap == 0.0 or v == REST]  # capture columns would not fit
     columns |= {label(*cands[k]): [value_tvd(d, freq[i, k]) for i, d in enumerate(dice)] for k in shown}
     for name, ws in weights.items():
         columns[name] = [scored(i, w) for i, w in enumerate(ws)]
@@ -197,13 +226,15 @@ def main() -> int:
     return 0
 
 
-def chosen_label(w: np.ndarray, cands: list[tuple[float, float]]) -> str:
+def chosen_label(w: np.ndarray, cands: list[tuple[float, float | str]]) -> str:
     """The candidates of weights `w` of at least 0.2, with their weights when mixed."""
     return "+".join(f"{x:.2f} {label(*cands[k])}" if x < 1 else label(*cands[k]) for k, x in enumerate(w) if x >= 0.2)
 
 
-def label(vigor: float, capture: float) -> str:
-    """A candidate's column: its vigor, and its capture when it has one."""
+def label(vigor: float, capture: float | str) -> str:
+    """A candidate's column: its vigor, and its capture when it has one; or the landing model."""
+    if vigor == REST:
+        return capture
     return f"v={vigor:g}" + (f" c={capture:g}" if capture else "")
 
 

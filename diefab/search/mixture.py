@@ -125,17 +125,19 @@ def fit_weights(counts: Sequence[np.ndarray], probs: Sequence[np.ndarray], penal
     alone = np.eye(k)[int(np.argmin(penalty))]
     if not len(counts) or k == 1:
         return alone
+    # every die's observed values side by side: columns of (K, M) probabilities and (M,) counts
     cs = [np.asarray(c, dtype=float) for c in counts]
-    ps = [np.asarray(p, dtype=float) for p in probs]
+    seen = [c > 0 for c in cs]
+    p_all = np.concatenate([np.asarray(p, dtype=float)[:, m] for p, m in zip(probs, seen)], axis=1)
+    c_all = np.concatenate([c[m] for c, m in zip(cs, seen)])
+    saturated = float(
+        np.sum(c_all * np.log(c_all / np.concatenate([np.full(m.sum(), c.sum()) for c, m in zip(cs, seen)])))
+    )
 
     def objective(w: np.ndarray) -> tuple[float, np.ndarray]:
-        value, grad = float(penalty @ w), penalty.copy()
-        for c, p in zip(cs, ps):
-            q = np.maximum(w @ p, 1e-300)
-            m = c > 0
-            value += 2.0 * float(np.sum(c[m] * np.log(c[m] / (c.sum() * q[m]))))
-            grad -= 2.0 * p[:, m] @ (c[m] / q[m])
-        return value, grad
+        q = np.maximum(w @ p_all, 1e-300)
+        value = float(penalty @ w) + 2.0 * (saturated - float(c_all @ np.log(q)))
+        return value, penalty - 2.0 * p_all @ (c_all / q)
 
     # a convex objective: one start reaches the minimum; the default alone is kept if SLSQP stops short of it
     res = minimize(objective, np.full(k, 1.0 / k), jac=True, method="SLSQP", bounds=[(0.0, 1.0)] * k,
