@@ -21,7 +21,8 @@ short still window (``--energy-fraction 0``: still on a resting face for
 
 The paper's die as made (a paper model of its final gem, 405 real rolls,
 Table 2) is the first row of every table; ``--guard`` adds the published
-rolls of 15 steel square cuboids (:mod:`diefab.search.published`).
+dice shipped with diefab (:mod:`diefab.search.published`): the source's
+further printed dice and 15 steel square cuboids.
 
 With ``--guard`` it computes, in this process, the figures the real-dice
 guard test (``tests/test_realrolls_guard.py``) checks: each landing model's
@@ -67,6 +68,7 @@ from diefab.search.fidelity import (
     noise_tvd,
     simulation_key,
 )
+from diefab.search.published import printed_dice
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / ".." / "shared" / "realrolls"
@@ -213,7 +215,10 @@ def guard(args) -> None:
         print(f"{d.name:<13} {d.n:>5} {noise_tvd(d, 4000):>8.4f} " + " ".join(f"{scores[d.name][c]:>13.4f}"
                                                                          for c in columns))  # fmt: skip
     mean = mean_scores(dice, scores)
-    groups = {"the paper's die and the shared dice": [d for d in dice if not d.name.startswith("cuboid-")],
+    printed = {d.name for d in printed_dice()}
+    groups = {"the paper's die and the shared dice": [d for d in dice if not d.name.startswith("cuboid-")
+                                                      and d.name not in printed],
+              "the source's further printed dice": [d for d in dice if d.name in printed],
               "the published cuboids": [d for d in dice if d.name.startswith("cuboid-")]}  # fmt: skip
     for label, group in groups.items():
         if group:

@@ -20,12 +20,15 @@ quasi-static limit of the gentlest throw: its probabilities are weighted as if
 drawn from ``--drops`` drops, and the prior places it at vigor 0 on a table
 that keeps every die (capture 1).  Every die is simulated at every candidate
 (``--drops`` drops, seed ``--seed``; cached with the other held-out
-benchmarks in ``benchmarks/results/calibrate_loo_cache.jsonl``).  Two
-sets of real dice:
+benchmarks in ``benchmarks/results/calibrate_loo_cache.jsonl``).  The sets
+of real dice:
 
 - *the eight*: the paper's gem and the seven shared dice (``--data``);
 - *the cuboids*: the 15 published steel square cuboids
-  (:func:`diefab.search.published.square_cuboid_dice`).
+  (:func:`diefab.search.published.square_cuboid_dice`);
+- with ``--more``, *the source's further dice*: the printed dice shipped
+  from the source of the eight (:func:`diefab.search.published.printed_dice`),
+  taken as rolled on the source's table, where the files do not say.
 
 A die's candidate is the one of least deviance of the real counts of the
 dice it is fitted on, plus a normal prior toward the default (vigor 1, no
@@ -34,24 +37,24 @@ or a mixture of the candidates (:func:`diefab.search.mixture.fit_weights`).  It 
 scored on its own simulated drops at that candidate, which took no part in the
 choice.  Rules, none of which sees the die it scores:
 
-- ``loo``: fitted on the other 22 dice;
-- ``other set``: the eight fitted on the 15 cuboids, the cuboids on the
-  eight: a whole set held out;
+- ``loo``: fitted on every other die (22 without ``--more``);
+- ``other set``: fitted on the dice of the other sets (the eight on the 15
+  cuboids, the cuboids on the eight): a whole set held out;
 - ``loo in set``: fitted on the other dice of its own set;
-- ``mix loo``: the mixture fitted on the other 22 dice;
+- ``mix loo``: the mixture fitted on every other die;
 - ``hier``: two levels, surface and population.  The population's
-  candidate is fitted on the other 22 dice; the die's is fitted on the
+  candidate is fitted on every other die; the die's is fitted on the
   other dice rolled on its surface (:data:`bench_heldout.SURFACE`; the
   cuboids share one) with the prior centred on the population's
   candidate, which alone decides for a die with no other die on its
   surface;
 - ``nested``: the rule, and the part of the grid it chooses among (all;
   vigor up to 2; no capture; no landing model), chosen for each die by an inner
-  leave-one-out over the other 22 dice
+  leave-one-out over every other die
   (:func:`diefab.search.crossval.nested_choices`, inner loss the TVD on
   their own drops): the held-out score of choosing, too.
 
-Then the goal's checks on the eight.
+Then the goal's checks on each set with the source's own columns.
 """
 
 from __future__ import annotations
@@ -76,7 +79,7 @@ from diefab.search.crossval import nested_choices, pick_candidate  # noqa: E402
 from diefab.search.fidelity import LANDING_MODELS, load_real_dice, noise_tvd, value_tvd  # noqa: E402
 from diefab.search.likelihood import deviance, smoothed  # noqa: E402
 from diefab.search.mixture import fit_weights, prior_penalty  # noqa: E402
-from diefab.search.published import square_cuboid_dice  # noqa: E402
+from diefab.search.published import printed_dice, square_cuboid_dice  # noqa: E402
 
 #: A landing-model candidate's "vigor" (its capture slot holds the model's name).
 REST = -1.0
@@ -91,6 +94,11 @@ def main() -> int:
     ap.add_argument("--capture", default="0", help="the candidates' capture energy (m g L), comma-separated (0 one)")
     ap.add_argument("--flat-faces", action="store_true", help="hold the resting faces flat (flat_faces)")
     ap.add_argument("--rest", default="", help="landing models as candidates too, comma-separated (basins, fast)")
+    ap.add_argument(
+        "--more",
+        action="store_true",
+        help="add the source's further printed dice (diefab.search.published.printed_dice) as a set",
+    )
     ap.add_argument("--drops", type=int, default=1000, help="simulated drops per die and candidate")
     ap.add_argument("--seed", type=int, default=3)
     ap.add_argument(
@@ -117,10 +125,12 @@ def main() -> int:
     if not args.prior > 0:
         raise SystemExit(f"--prior {args.prior} must be > 0 (inf: none)")
     started = time.perf_counter()
-    eight, cuboids = load_real_dice(args.data), square_cuboid_dice()
-    dice = eight + cuboids
-    sets = [list(range(len(eight))), list(range(len(eight), len(dice)))]
-    surfaces = [surface(d.name) if i in sets[0] else "the cuboids' table" for i, d in enumerate(dice)]
+    groups = {"the eight": load_real_dice(args.data), "the published cuboids": square_cuboid_dice(),
+              "the source's further dice": printed_dice() if args.more else []}  # fmt: skip
+    dice = [d for group in groups.values() for d in group]
+    set_of = [k for k, group in enumerate(groups.values()) for _ in group]
+    sets = [[i for i in range(len(dice)) if set_of[i] == k] for k in range(len(groups))]
+    surfaces = [surface(d.name) if set_of[i] != 1 else "the cuboids' table" for i, d in enumerate(dice)]
     sims = Simulations(CACHE, args.workers)
     freq = np.zeros((len(dice), len(cands)), dtype=object)
     probs = np.zeros((len(dice), len(cands)), dtype=object)
@@ -170,7 +180,7 @@ def main() -> int:
         return value_tvd(dice[i], sum(w[k] * freq[i, k] for k in range(len(cands))))
 
     def in_set(i: int) -> int:
-        return 0 if i in sets[0] else 1
+        return set_of[i]
 
     # a method predicts die `i` from the dice `rows` only (rows never hold i), among some of the candidates
     methods = {
@@ -205,7 +215,9 @@ def main() -> int:
           f"candidates: vigor {args.vigor} x capture {args.capture}{', flat faces' * args.flat_faces}; "
           f"prior sd {args.prior:g} toward vigor 1 without capture; perfect: a perfect model at "
           f"{args.drops} drops")  # fmt: skip
-    for heading, rows in (("the eight", sets[0]), ("the published cuboids", sets[1])):
+    for heading, rows in zip(groups, sets):
+        if not rows:
+            continue
         print(f"\n{heading}:")
         shown = [c for c in columns if not np.isnan([columns[c][i] for i in rows]).all()]  # the source's, where given
         table([dice[i] for i in rows], {c: [columns[c][i] for i in rows] for c in shown}, [noise[i] for i in rows])
@@ -217,11 +229,12 @@ def main() -> int:
             chosen = [chosen_label(weights[name][i], cands) for i in rows]
             print(f"  {name:<11} chosen per die: " + ", ".join(f"{dice[i].name} {c}" for i, c in zip(rows, chosen)))
         print("  nested      method per die: " + ", ".join(f"{dice[i].name} {choices[i][0]}" for i in rows))
-    print("\ngoal checks on the eight:")
-    rows = sets[0]
-    for name in weights:
-        goal([dice[i] for i in rows], [columns[name][i] for i in rows],
-             [columns[label(*cands[default])][i] for i in rows], [noise[i] for i in rows], name)  # fmt: skip
+    for heading, rows in zip(groups, sets):
+        if any("ours" in dice[i].reference for i in rows):  # the sets with the source's own columns
+            print(f"\ngoal checks on {heading}:")
+            for name in weights:
+                goal([dice[i] for i in rows], [columns[name][i] for i in rows],
+                     [columns[label(*cands[default])][i] for i in rows], [noise[i] for i in rows], name)  # fmt: skip
     print(f"\n({time.perf_counter() - started:.0f} s)")
     return 0
 

@@ -84,7 +84,8 @@ def paper_die() -> RealDie:
 
 def load_real_dice(folder: str | Path | None, *, paper: bool = True, published: bool = False) -> list[RealDie]:
     """The paper's die (if `paper`), every die of the real-rolls `folder` (``*.json``, sorted by name) and,
-    if `published`, the published tables shipped with diefab (:func:`diefab.search.published.square_cuboid_dice`).
+    if `published`, the published dice shipped with diefab (:func:`diefab.search.published.printed_dice`,
+    :func:`diefab.search.published.square_cuboid_dice`).
 
     A `folder` that is None or does not exist contributes no die.
     """
@@ -94,9 +95,9 @@ def load_real_dice(folder: str | Path | None, *, paper: bool = True, published: 
     if folder is not None and Path(folder).is_dir():
         dice += [realrolls_die(p) for p in sorted(Path(folder).glob("*.json"))]
     if published:
-        from diefab.search.published import square_cuboid_dice
+        from diefab.search.published import printed_dice, square_cuboid_dice
 
-        dice += square_cuboid_dice()
+        dice += printed_dice() + square_cuboid_dice()
     return dice
 
 

@@ -10,6 +10,11 @@ dice: nothing in diefab was fitted to them.
 each rolled 275-1011 times by hand; the count is of a square face up
 (:func:`square_cuboid_dice`).
 
+``baktash2025/``: further printed dice of the source of the shared real
+rolls (Baktash et al. 2025, "Putting Rigid Bodies to Rest"), each in the
+real-rolls format with its geometry, its counts and the source's own
+predictions (:func:`printed_dice`).
+
 Examples
 --------
 >>> dice = square_cuboid_dice()
@@ -26,10 +31,12 @@ import numpy as np
 
 from diefab.search.realdie import RealDie
 
-__all__ = ["PUBLISHED", "published_source", "square_cuboid", "square_cuboid_dice"]
+__all__ = ["PRINTED", "PUBLISHED", "printed_dice", "published_source", "square_cuboid", "square_cuboid_dice"]
 
 #: The shipped tables, by name.
 PUBLISHED = ("square-cuboids",)
+#: The shipped folder of printed dice in the real-rolls format.
+PRINTED = "baktash2025"
 
 
 def _table(name: str) -> dict:
@@ -70,3 +77,13 @@ def square_cuboid_dice() -> list[RealDie]:
         design = square_cuboid(float(row["x_over_y"]), name=f"cuboid-{row['x_over_y']:.2f}")
         dice.append(RealDie(design.name, design, np.array([n - square, square])))
     return dice
+
+
+def printed_dice() -> list[RealDie]:
+    """The shipped printed dice of the :data:`PRINTED` folder (real-rolls format), sorted by name."""
+    from pathlib import Path
+
+    from diefab.search.realdie import realrolls_die
+
+    folder = Path(str(resources.files("diefab").joinpath("data", "published", PRINTED)))
+    return [realrolls_die(p) for p in sorted(folder.glob("*.json"))]
