@@ -358,6 +358,49 @@ def test_sigterm_stops_validate_cleanly_with_its_workers(tmp_path):
         assert "zombie" in status or f"PPid:\t{os.getpid()}" not in status
 
 
+#: Forty runs of two workers, each stopped after a random 0.05 to 0.6 s, wherever the stop lands.
+_STOPPED_AT_RANDOM = """
+import signal
+import numpy as np
+from diefab.core import files
+from diefab.dice.design import load_design
+from diefab.physics.simulate import SimulationInterrupted, simulate
+
+def interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+files.STOP_SIGNALS = (*files.STOP_SIGNALS, signal.SIGALRM)
+signal.signal(signal.SIGALRM, interrupt)
+gem, rng, stopped = load_design("fudge-gem"), np.random.default_rng(2), 0
+for _ in range(40):
+    signal.setitimer(signal.ITIMER_REAL, rng.uniform(0.05, 0.6))
+    try:
+        simulate(gem, 2_000_000, seed=1, workers=2)
+    except SimulationInterrupted:
+        stopped += 1
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+print(stopped)
+"""
+
+
+@pytest.mark.slow
+def test_a_stop_anywhere_in_a_pooled_run_never_hangs():
+    """A stop inside the pool's own calls (submit, wait) still ends the run: none of the forty hangs."""
+    import signal
+    import subprocess
+    import sys
+
+    if not hasattr(signal, "setitimer"):
+        pytest.skip("needs interval timers")
+    try:
+        out = subprocess.run([sys.executable, "-c", _STOPPED_AT_RANDOM], capture_output=True, text=True, timeout=180)
+    except subprocess.TimeoutExpired:
+        pytest.fail("a stopped run hung")
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["40"]
+
+
 @pytest.mark.parametrize("workers", [1, 2])
 def test_interrupt_stops_cleanly_and_counts_finished_drops(gem, workers):
     from diefab.physics.simulate import SimulationInterrupted

@@ -144,10 +144,18 @@ def signals_deferred():
                 previous[signum] = signal.signal(signum, lambda s, frame: noted.append(s))
         yield
     finally:
+        stopped = None
         for signum, handler in previous.items():
-            signal.signal(signum, handler)
+            while True:  # a stop landing on a handler already put back raises here: finish putting them back
+                try:
+                    signal.signal(signum, handler)
+                    break
+                except KeyboardInterrupt as exc:
+                    stopped = exc
         for signum in dict.fromkeys(noted):
             signal.raise_signal(signum)
+        if stopped is not None:
+            raise stopped
 
 
 class ExclusiveLock:

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from diefab.core.errors import DesignError, PhysicsError
+from diefab.core.files import signals_deferred
 from diefab.dice.design import Design
 from diefab.dice.drop import PhysicsSettings
 from diefab.made.fill import Fill
@@ -339,11 +340,15 @@ def simulate(
             from concurrent.futures import FIRST_COMPLETED, wait
 
             pool = worker_pool(workers)
-            pending = {pool.submit(run_batch, body, settings, seed, a, b): (a, b) for a, b in batches}
+            # A stop raised inside the pool's calls can leave a future's lock held, and the pool's own
+            # thread then waits on it for ever when the run is stopped: stops are noted there, and raised
+            # between the calls.
+            with signals_deferred():
+                pending = {pool.submit(run_batch, body, settings, seed, a, b): (a, b) for a, b in batches}
             while pending:
-                # a timeout brings the main thread back to Python now and then, to run a signal handler
-                # whose signal the kernel gave to another thread (a progress bar's, say)
-                ready, _ = wait(pending, timeout=SIGNAL_POLL, return_when=FIRST_COMPLETED)
+                # the timeout brings the main thread back now and then, to raise a stop noted meanwhile
+                with signals_deferred():
+                    ready, _ = wait(pending, timeout=SIGNAL_POLL, return_when=FIRST_COMPLETED)
                 for future in ready:
                     finished(*pending.pop(future), future.result())
                 check_stop()  # an interrupt that landed where it was swallowed (inside the pool's machinery)
