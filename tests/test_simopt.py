@@ -271,3 +271,22 @@ def test_cli_run_on_a_dask_cluster_matches_local_workers(tmp_path, capsys):
     remote = _records(tmp_path / "dask" / "fudge-gem-simulation-opt")
     assert [r["face_counts"] for r in local] == [r["face_counts"] for r in remote]
     assert [r["objective"] for r in local] == [r["objective"] for r in remote]
+
+
+@pytest.mark.parametrize("start", [0.05, 0.5, 0.95])
+def test_cma_with_one_free_parameter_runs_to_its_budget_and_finds_the_minimum(start):
+    """One free parameter (a calibration of restitution alone) is a one-dimensional CMA-ES run."""
+    from types import SimpleNamespace
+
+    from diefab.search.simmethods import BudgetSpent, Evaluator, run_cma
+
+    def objective(x, drops):
+        return {"x": x.tolist(), "drops": drops, "feasible": True, "objective": float((x[0] - 0.3) ** 2)}
+
+    ev = Evaluator(objective, [], lambda record: None, lambda i, drops: i >= 300)
+    spec = SimpleNamespace(seed=3, sigma0=0.3, sims_per_eval=20, max_sims=40, x0=(start,))
+    ev.raise_level(spec.sims_per_eval)
+    with pytest.raises(BudgetSpent):
+        run_cma(ev, spec, 1, lambda drops: 0.0)
+    assert ev.count == 300
+    assert ev.best["x"][0] == pytest.approx(0.3, abs=1e-3)

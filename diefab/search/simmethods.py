@@ -108,6 +108,9 @@ def run_cma(ev: Evaluator, spec: RunSpec, k: int, floor) -> None:
                 "tolfun": 0.0,
                 "tolflatfitness": 10,
                 "tolx": 1e-4,
+                # pycma 4 bounds each coordinate's step by a third of its range, and in one dimension
+                # (one free parameter) it fails when it applies that bound: no bound there
+                **({"maxstd": np.inf} if len(x) == 1 else {}),
             },
         )
         while not es.stop():
