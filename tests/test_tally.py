@@ -157,8 +157,11 @@ def _roll_in_a_terminal(folder, keys: bytes, close: bool) -> int:
         for key in keys + (b"" if close else b"q"):
             os.write(fd, bytes([key]))
             time.sleep(0.3)
-            while select.select([fd], [], [], 0)[0]:
-                shown += os.read(fd, 65536)
+            try:
+                while select.select([fd], [], [], 0)[0]:
+                    shown += os.read(fd, 65536)
+            except OSError:  # the command had ended (after the last key) and closed its end: EIO on Linux
+                break
         if not close:  # read until the command has ended (a terminal that nobody reads would block it)
             while select.select([fd], [], [], 30)[0]:
                 try:
