@@ -110,7 +110,7 @@ def run_cma(ev: Evaluator, spec: RunSpec, k: int, floor) -> None:
                 "tolx": 1e-4,
                 # pycma 4 bounds each coordinate's step by a third of its range, and in one dimension
                 # (one free parameter) it fails when it applies that bound: no bound there
-                **({"maxstd": np.inf} if len(x) == 1 else {}),
+                **({"maxstd": np.inf} if k == 1 else {}),
             },
         )
         while not es.stop():
