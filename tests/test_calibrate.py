@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from diefab.core.errors import PhysicsError
-from diefab.physics.profiles import load_profile, profile_to_toml
+from diefab.physics.profiles import load_profile, profile_to_toml, read_profile
 from diefab.physics.simulate import PhysicsSettings
 
 # ----------------------------------------------------------------------
@@ -46,6 +46,45 @@ def test_bad_profile_is_named(tmp_path, text, words):
     with pytest.raises(PhysicsError, match=None) as info:
         load_profile(path)
     assert words in str(info.value) and str(path) in str(info.value)
+
+
+def test_a_profile_names_the_dice_it_was_fitted_on(tmp_path):
+    from diefab.physics.profiles import domain_note, fitted_profiles
+
+    path = tmp_path / "p.toml"
+    path.write_text(profile_to_toml(PhysicsSettings(), domain={"fills": ["solid", "print"], "rolled": "on felt"}))
+    assert domain_note(path, "solid") is None and domain_note(path, "print") is None
+    note = domain_note(path, "paper")
+    assert "solid and print dice rolled on felt" in note and "this die is paper" in note
+    assert domain_note("soft-tray", "paper") is None  # fitted on no die: nothing to lie outside of
+    assert all(domain_note(name, "paper") is not None for name in fitted_profiles())  # each fitted on solid dice
+
+
+@pytest.mark.parametrize(
+    "domain, words",
+    [
+        ("fills = 'solid'", "is not a list of fills"),
+        ("fills = []", "is not a list of fills"),
+        ("fills = ['wood']", "is not a list of fills"),
+        ("fills = ['solid']\nsurface = 'felt'", "unknown key 'surface' in [domain]"),
+        ("fills = ['solid']\nrolled = 3", "domain.rolled = 3"),
+    ],
+)
+def test_bad_profile_domain_is_named(tmp_path, domain, words):
+    path = tmp_path / "p.toml"
+    path.write_text(f"[physics]\n[domain]\n{domain}\n")
+    with pytest.raises(PhysicsError) as info:
+        load_profile(path)
+    assert words in str(info.value) and str(path) in str(info.value)
+
+
+def test_cli_notes_a_die_outside_the_profiles_dice(run):
+    code, _, err = run("validate", "fudge-gem-paper", "--physics", "printed-table", "--sims", "20", "--workers", "1",
+                       "--json")  # fmt: skip
+    assert code == 0, err
+    assert "'printed-table' was fitted on solid dice" in err and "this die is paper" in err
+    code, _, err = run("validate", "d6", "--physics", "printed-table", "--sims", "20", "--workers", "1", "--json")
+    assert code == 0 and "note" not in err
 
 
 def test_missing_profile(tmp_path):
@@ -260,6 +299,7 @@ def test_cli_calibrates_writes_a_profile_and_resumes(tmp_path, run):
     assert report["evaluations"] == 3 and not report["finished"]
     settings = load_profile(report["profile"])
     assert settings.restitution == pytest.approx(report["fitted"]["restitution"]["value"])
+    assert read_profile(report["profile"])[0]["domain"] == {"fills": ["solid"]}  # the fill of the d6 it was fitted on
     code, out, err = run("calibrate", "--resume", tmp_path / "calibrated", "--max-evals", "5", "--json")
     assert code == 0, err
     again = json.loads(out)

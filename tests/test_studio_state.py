@@ -253,3 +253,13 @@ def test_make_tab_writes_the_net_and_the_solid_with_markers(tmp_path):
     _, marked = write_solid(design, tmp_path / "marked", markers=True)
     assert marked["watertight"] and len(marked["markers"]) == len(design.polyhedron.faces)
     assert marked["marker_volume_mm3"] > 0 and not plain.get("marker_volume_mm3")
+
+
+def test_validate_job_notes_a_die_outside_the_profiles_dice():
+    from diefab.dice.design import load_design
+    from diefab.studio.jobs import validate_job
+
+    paper = load_design("fudge-gem-paper")
+    r = validate_job(paper, 10, 0, "printed-table", report=lambda *a: None)
+    assert sum(r["counts"]) + r["cocked"] + r["unsettled"] == 10 and "this die is paper" in r["note"]
+    assert validate_job(paper, 10, 0, None, report=lambda *a: None)["note"] is None

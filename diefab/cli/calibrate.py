@@ -233,6 +233,7 @@ def run(spec, log, run_name, history, budget, max_evals, workers, client, as_jso
     live, update = _simulation_view(spec, budget * 60, history)
     records = list(history)
     names = ", ".join(d.name for d in dice)
+    domain = {"fills": sorted({d.design.fill.kind for d in dice})}
 
     def summary(best):
         return {
@@ -246,7 +247,8 @@ def run(spec, log, run_name, history, budget, max_evals, workers, client, as_jso
 
     def on_best(record):
         settings = spec.settings(record["x"])
-        text = profile_to_toml(settings, name=run_name, calibration=summary(record), comment=f"Written by: {command}",
+        text = profile_to_toml(settings, name=run_name, calibration=summary(record), domain=domain,
+                               comment=f"Written by: {command}",
                                description=f"physics calibrated to the real rolls of {names}")  # fmt: skip
         atomic_write(profile_path, text, inputs=inputs)
         if update:

@@ -269,7 +269,19 @@ def physics_settings(design: Design, profile: str | None = None, **overrides):
 
     if profile is None:
         return PhysicsSettings.from_mapping(design.physics, **overrides)
-    return load_profile(profile, base=design.physics, **overrides)
+    settings = load_profile(profile, base=design.physics, **overrides)
+    note_profile_domain(profile, design.fill.kind)
+    return settings
+
+
+def note_profile_domain(profile: str, fill: str) -> None:
+    """One line on stderr when a die of `fill` lies outside the dice physics `profile` was fitted on."""
+    from diefab.physics.profiles import domain_note
+
+    note = domain_note(profile, fill)
+    if note is not None:
+        click.echo(f"diefab: note: {note}: see its held-out figures in docs/reference/profiles.md",
+                   err=True)  # fmt: skip
 
 
 def physics_options(func):

@@ -103,7 +103,7 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
     """
     from dataclasses import replace
 
-    from diefab.cli.common import refuse_options
+    from diefab.cli.common import note_profile_domain, refuse_options
     from diefab.core.files import atomic_write, ensure_dir, output_path
     from diefab.dice.design import design_to_toml
     from diefab.dice.targets import parse_target
@@ -136,6 +136,8 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
     if scheduler is not None:
         refuse_options(ctx, ["workers"], "does not apply with --scheduler (the cluster's workers run the drops)")
     physics = {} if physics_profile is None else load_profile(physics_profile).as_dict()
+    if physics_profile is not None:
+        note_profile_domain(physics_profile, made.kind)
     if flat_faces:
         physics = PhysicsSettings.from_mapping(physics, flat_faces=True).as_dict()
     throws = [load_profile(p, base=physics).as_dict() for p in STANDARD] if robust else []

@@ -2,10 +2,12 @@
 
 A profile is a TOML file with a ``[physics]`` table (the keys of
 :class:`diefab.physics.simulate.PhysicsSettings`), optionally ``name``,
-``description`` and a ``[calibration]`` table (what ``diefab calibrate``
-found).  ``validate``, ``optimize`` and ``calibrate`` take one with
-``--physics``: a path, or the name of a shipped profile
-(:func:`list_profiles`).
+``description``, a ``[calibration]`` table (what ``diefab calibrate``
+found) and a ``[domain]`` table: the fills of the dice it was fitted on
+(``fills``) and how and where they were rolled (``rolled``), against
+which :func:`domain_note` checks a die.  ``validate``, ``optimize``,
+``design`` and ``calibrate`` take one with ``--physics``: a path, or the
+name of a shipped profile (:func:`list_profiles`).
 
 The shipped set describes a standard set of throws and tables
 (:data:`STANDARD`): a soft tray, a wooden table, a hard tray, and a low and a
@@ -35,6 +37,7 @@ PROFILE_MAX_BYTES = 1 << 20
 __all__ = [
     "PROFILE_KEYS",
     "STANDARD",
+    "domain_note",
     "fitted_profiles",
     "list_profiles",
     "load_profile",
@@ -44,7 +47,7 @@ __all__ = [
 ]
 
 #: Top-level keys of a physics profile.
-PROFILE_KEYS = ("name", "description", "physics", "calibration")
+PROFILE_KEYS = ("name", "description", "physics", "calibration", "domain")
 #: The standard throws and tables of ``validate --sensitivity`` and ``optimize --robust`` (shipped profiles).
 STANDARD = ("soft-tray", "wooden-table", "hard-tray", "low-spin", "high-spin")
 
@@ -103,10 +106,45 @@ def read_profile(spec) -> tuple[dict[str, Any], str]:
     if not isinstance(data.get("physics"), dict):
         raise PhysicsError(f"{source}: needs a [physics] table of settings")
     for key, kind, what in (("name", str, "a string"), ("description", str, "a string"),
-                            ("calibration", dict, "a table")):  # fmt: skip
+                            ("calibration", dict, "a table"), ("domain", dict, "a table")):  # fmt: skip
         if key in data and not isinstance(data[key], kind):
             raise PhysicsError(f"{source}: {key} = {data[key]!r} is not {what}")
+    if "domain" in data:
+        _check_domain(data["domain"], source)
     return data, source
+
+
+def _check_domain(domain: Mapping[str, Any], source: str) -> None:
+    from diefab.made.fill import KINDS
+
+    unknown = sorted(set(domain) - {"fills", "rolled"})
+    if unknown:
+        raise PhysicsError(f"{source}: unknown key {unknown[0]!r} in [domain] (keys: fills, rolled)")
+    fills = domain.get("fills", [])
+    if not isinstance(fills, list) or not fills or any(f not in KINDS for f in fills):
+        raise PhysicsError(f"{source}: domain.fills = {fills!r} is not a list of fills ({', '.join(KINDS)})")
+    if not isinstance(domain.get("rolled", ""), str):
+        raise PhysicsError(f"{source}: domain.rolled = {domain['rolled']!r} is not a string")
+
+
+def domain_note(spec, fill: str) -> str | None:
+    """Why a die of fill `fill` lies outside the dice profile `spec` was fitted on, or None if it does not.
+
+    Only a profile with a ``[domain]`` table has dice to lie outside of.
+
+    Examples
+    --------
+    >>> domain_note("printed-table", "solid") is None
+    True
+    >>> print(domain_note("printed-table", "paper"))  # doctest: +ELLIPSIS
+    physics profile 'printed-table' was fitted on solid dice rolled on ...; this die is paper, outside them
+    """
+    data, source = read_profile(spec)
+    domain = data.get("domain")
+    if domain is None or fill in domain["fills"]:
+        return None
+    rolled = f" rolled {domain['rolled']}" if domain.get("rolled") else ""
+    return f"{source} was fitted on {' and '.join(domain['fills'])} dice{rolled}; this die is {fill}, outside them"
 
 
 def load_profile(spec, base: Mapping[str, Any] | None = None, **overrides: Any) -> PhysicsSettings:
@@ -126,7 +164,8 @@ def load_profile(spec, base: Mapping[str, Any] | None = None, **overrides: Any) 
 
 
 def profile_to_toml(settings: PhysicsSettings, *, name: str = "", description: str = "",
-                    calibration: Mapping[str, Any] | None = None, comment: str = "") -> str:  # fmt: skip
+                    calibration: Mapping[str, Any] | None = None, domain: Mapping[str, Any] | None = None,
+                    comment: str = "") -> str:  # fmt: skip
     """A physics profile as TOML (round-trips through :func:`load_profile`)."""
     import tomli_w
 
@@ -138,6 +177,8 @@ def profile_to_toml(settings: PhysicsSettings, *, name: str = "", description: s
     data["physics"] = settings.as_dict()
     if calibration:
         data["calibration"] = dict(calibration)
+    if domain:
+        data["domain"] = dict(domain)
     header = "".join(f"# {line}\n" for line in comment.splitlines())
     return header + tomli_w.dumps(data)
 

@@ -126,7 +126,7 @@ class ValidatePanel(JobPanel):
         self.chart.options.clear()
         self.chart.options.update(validation_options(values, r))
         self.chart.update()
-        self.text.set_text(f"{r['n']} drops done")
+        self.text.set_text(f"{r['n']} drops done" + (f"; note: {r['note']}" if r.get("note") else ""))
 
 
 class DesignPanel(JobPanel):

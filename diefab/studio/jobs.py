@@ -194,7 +194,7 @@ def validate_job(design, sims: int, seed: int, profile: str | None, *, report) -
     import numpy as np
 
     from diefab.core.errors import PhysicsError
-    from diefab.physics.profiles import load_profile
+    from diefab.physics.profiles import domain_note, load_profile
     from diefab.physics.simulate import PhysicsSettings, simulate
     from diefab.stats.goodness import goodness_of_fit
 
@@ -222,6 +222,7 @@ def validate_job(design, sims: int, seed: int, profile: str | None, *, report) -
         "expected_tvd": float(fit.expected_tvd),
         "chi2": float(fit.chi2) if np.isfinite(fit.chi2) else None,
         "seconds": float(result.seconds),
+        "note": domain_note(profile, design.fill.kind) if profile else None,
     }
 
 
