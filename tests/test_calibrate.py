@@ -444,3 +444,42 @@ def test_fit_settings_finds_the_setting_that_made_the_rolls_and_the_prior_pulls_
     assert np.allclose(x, [0.7, 0.3], atol=0.05)
     tight, _ = fit_settings(dice, surfaces, np.array([0.5, 0.5]), sigma=1e-4)
     assert np.allclose(tight, [0.5, 0.5], atol=0.01)
+
+
+def test_held_out_scores_each_die_at_the_candidate_the_other_dice_choose():
+    from diefab.dice.design import load_design
+    from diefab.search.calibrate import RealDie, deviance, held_out, smoothed
+
+    cube = load_design("d6")
+    rng = np.random.default_rng(2)
+    # Three candidates: each a distribution of the six values; die 0 was rolled from candidate 0,
+    # dice 1 to 3 from candidate 2.
+    truth = [np.full(6, 1 / 6), np.array([3, 1, 1, 1, 1, 3]) / 10, np.array([1, 1, 3, 3, 1, 1]) / 10]
+    dice = [RealDie(f"die{k}", cube, rng.multinomial(600, truth[c])) for k, c in enumerate((0, 2, 2, 2))]
+
+    def record(c, drops):
+        sims = [rng.multinomial(drops, truth[c]) for _ in dice]
+        return {"x": [c / 2], "params": {"restitution": c / 2}, "drops": drops, "feasible": True,
+                "dice": [{"counts": s.tolist(), "deviance": deviance(d.counts, d.symmetrized(smoothed(s)))}
+                         for d, s in zip(dice, sims)]}  # fmt: skip
+
+    records = [record(c, 400) for c in range(3)] + [record(2, 4000), {"x": [1.0], "feasible": False}]
+    rows = held_out(records, dice)
+    # die 0 is out-voted: its candidate is the others' choice, 2, and it scores far off; the others get 2 too
+    assert [r["params"]["restitution"] for r in rows] == [1.0] * 4
+    assert rows[0]["tvd"] > 0.2 > 0.05 > max(r["tvd"] for r in rows[1:])
+    assert all(r["drops"] == 4000 for r in rows)  # scored on the chosen candidate's evaluation of most drops
+    assert held_out(records, dice[:1]) is None and held_out(records[-1:], dice) is None
+
+
+def test_cli_calibrate_reports_each_die_held_out(tmp_path, run):
+    code, out, err = run("calibrate", "--die", "d6", "10,11,9,10,12,8", "--die", "d6", "12,9,10,10,11,8",
+                         "--free", "restitution", "--method", "grid", "--grid-points", "3", "--sims-per-eval", "30",
+                         "--workers", "1", "--out", tmp_path, "--json")  # fmt: skip
+    assert code == 0, err
+    report = json.loads(out)
+    assert report["held_out_candidates"] == "grid"
+    grid = {0.0, 0.45, 0.9}  # restitution's range [0, 0.9] in three points
+    for die in report["dice"]:
+        held = die["held_out"]
+        assert held["name"] == die["name"] and 0 <= held["tvd"] <= 1 and held["params"]["restitution"] in grid

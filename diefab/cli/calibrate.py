@@ -225,7 +225,7 @@ def run(spec, log, run_name, history, budget, max_evals, workers, client, as_jso
     from diefab.cli.optimize import _simulation_view
     from diefab.physics.profiles import profile_to_toml
     from diefab.search.calibrate import calibrate as fit
-    from diefab.search.calibrate import curvature, die_report, grid_interval
+    from diefab.search.calibrate import curvature, die_report, grid_interval, held_out
 
     dice = spec.real_dice
     profile_path = output_path(log.folder, run_name, ".toml")
@@ -279,10 +279,13 @@ def run(spec, log, run_name, history, budget, max_evals, workers, client, as_jso
             fitted[name]["interval"] = interval
     start = next((r for r in records if r.get("kind") == "start" and r.get("feasible")), None)
     per_die = []
+    others = held_out(records, dice)
     for k, die in enumerate(dice):
         row = die_report(die, best["dice"][k]["counts"])
         if start is not None:
             row["start"] = die_report(die, start["dice"][k]["counts"])
+        if others is not None:
+            row["held_out"] = others[k]
         per_die.append(row)
     report = {
         "name": run_name,
@@ -293,6 +296,7 @@ def run(spec, log, run_name, history, budget, max_evals, workers, client, as_jso
         "start_deviance": None if start is None else start["deviance"],
         "start_drops_per_die": None if start is None else start["drops"],
         "dice": per_die,
+        "held_out_candidates": None if others is None else ("grid" if spec.method == "grid" else "proposed"),
         "settings": spec.settings(best["x"]).as_dict(),
         "evaluations": result.evaluations,
         "replayed": result.replayed,
@@ -305,6 +309,13 @@ def run(spec, log, run_name, history, budget, max_evals, workers, client, as_jso
         emit_json(report)
         return
     print_report(report)
+
+
+#: How the held-out column chose each die's candidate, by the run's kind of candidates.
+HELD_OUT = {
+    "grid": "each at the grid point the other dice fit best",
+    "proposed": "each at the evaluated point the other dice fit best, among points proposed with every die in view",
+}
 
 
 def print_report(report) -> None:
@@ -325,12 +336,27 @@ def print_report(report) -> None:
             spread = "not determined by the counts" if fit["se"] is None else f"{fit['se']:.3g}"
         table.add_row(name, f"{fit['value']:.4g}", spread)
     con.print(table)
-    dice = Table("die", "rolls", "TVD fitted", "TVD start", "sampling TVD", "G² (df)", "p")
+    held = [d["held_out"] for d in report["dice"] if "held_out" in d]
+    columns = ["die", "rolls", "TVD fitted", *(["TVD held out"] if held else []), "TVD start", "sampling TVD",
+               "G² (df)", "p"]  # fmt: skip
+    dice = Table(*columns)
     for d in report["dice"]:
         start = d.get("start")
-        dice.add_row(d["name"], str(d["rolls"]), f"{d['tvd']:.4f}", "-" if start is None else f"{start['tvd']:.4f}",
-                     f"{d['noise_tvd']:.4f}", f"{d['deviance']:.2f} ({d['df']})", f"{d['p_value']:.3g}")  # fmt: skip
+        dice.add_row(d["name"], str(d["rolls"]), f"{d['tvd']:.4f}",
+                     *([f"{d['held_out']['tvd']:.4f}"] if held else []),
+                     "-" if start is None else f"{start['tvd']:.4f}", f"{d['noise_tvd']:.4f}",
+                     f"{d['deviance']:.2f} ({d['df']})", f"{d['p_value']:.3g}")  # fmt: skip
     con.print(dice)
+    if held:
+        rows = report["dice"]
+        start = f", at the start {_mean_tvd([d['start'] for d in rows]):.4f}" if all("start" in d for d in rows) else ""
+        con.print(f"mean TVD: fitted {_mean_tvd(rows):.4f} (in-sample), held out {_mean_tvd(held):.4f} "
+                  f"({HELD_OUT[report['held_out_candidates']]}){start}; "
+                  f"sampling alone {float(np.mean([d['noise_tvd'] for d in rows])):.4f}")  # fmt: skip
     state = "finished" if report["finished"] else "stopped by the budget or --max-evals (resume to continue)"
     con.print(f"{report['evaluations']} evaluations ({report['replayed']} replayed), {report['drops']:,} drops; "
               f"{state}\nlog {report['run_folder']}\nwrote {report['profile']}")  # fmt: skip
+
+
+def _mean_tvd(rows) -> float:
+    return float(np.mean([r["tvd"] for r in rows]))

@@ -27,6 +27,10 @@ physical labels were not recorded, :attr:`RealDie.groups`) are compared with
 the simulated probabilities averaged within the group, so the labelling
 does not matter.
 
+With two or more dice, :func:`held_out` scores each die at the candidate
+the *other* dice fit best (leave one die out): what the fitted physics is
+worth on a die it never saw, beside the in-sample fit.
+
 The uncertainty of the fitted settings comes from the curvature of the
 deviance at the optimum (a quadratic fitted by least squares to the
 evaluations near it): the covariance is ``2 H⁻¹`` where ``H`` is the Hessian
@@ -75,6 +79,7 @@ __all__ = [
     "curvature",
     "deviance",
     "grid_interval",
+    "held_out",
     "parameter_value",
     "real_die",
     "realrolls_die",
@@ -355,3 +360,38 @@ def calibrate(spec: CalibrationSpec, **kwargs: Any):
         kwargs["objective"] = CalibrationObjective(spec, workers=kwargs.get("workers"),
                                                    scheduler=kwargs.get("scheduler"))  # fmt: skip
     return optimize_by_simulation(spec, **kwargs)
+
+
+def held_out(records: Sequence[Mapping[str, Any]], dice: Sequence[RealDie]) -> list[dict[str, Any]] | None:
+    """Each die scored at the evaluated candidate of least deviance of the other dice: leave one die out.
+
+    The candidates are the run's feasible evaluations at its first drop
+    count, the count every candidate was first simulated at: every point of
+    a grid, whose choice no die took part in, and the points CMA-ES or
+    Nelder-Mead proposed, whose path every die steered (there a die is held
+    out of the choice among those points, not of their proposal).
+
+    Returns
+    -------
+    list of dict or None
+        Per die, :func:`die_report` of its own simulated counts at the
+        candidate chosen without it (its evaluation of most drops,
+        ``drops``), with that candidate's ``params``; None with fewer than
+        two dice or no feasible evaluation.
+    """
+    from diefab.search.crossval import pick_candidate
+
+    feasible = [r for r in records if r.get("feasible")]
+    if len(dice) < 2 or not feasible:
+        return None
+    drops = min(r["drops"] for r in feasible)
+    candidates = [r for r in feasible if r["drops"] == drops]
+    dev = np.array([[r["dice"][k]["deviance"] for r in candidates] for k in range(len(dice))])
+    flat = np.zeros((len(candidates), 1))  # no prior: the other dice alone choose
+    rows = []
+    for k, die in enumerate(dice):
+        chosen = candidates[pick_candidate(dev, [i for i in range(len(dice)) if i != k], flat, np.zeros(1), math.inf)]
+        scored = max((r for r in feasible if r["x"] == chosen["x"]), key=lambda r: r["drops"])  # its most drops
+        rows.append({**die_report(die, scored["dice"][k]["counts"]), "params": dict(chosen["params"]),
+                     "drops": scored["drops"]})  # fmt: skip
+    return rows
