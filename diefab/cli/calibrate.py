@@ -320,7 +320,7 @@ HELD_OUT = {
 
 def print_report(report) -> None:
     """The human-readable calibration report."""
-    from rich.table import Table
+    from rich.table import Column, Table
 
     con = console()
     con.print(f"{BOLD}{report['name']}{PLAIN}: deviance {report['deviance']:.2f} "
@@ -337,16 +337,16 @@ def print_report(report) -> None:
         table.add_row(name, f"{fit['value']:.4g}", spread)
     con.print(table)
     held = [d["held_out"] for d in report["dice"] if "held_out" in d]
-    columns = ["die", "rolls", "TVD fitted", *(["TVD held out"] if held else []), "TVD start", "sampling TVD",
-               "G² (df)", "p"]  # fmt: skip
-    dice = Table(*columns)
+    columns = ["die", "rolls", "fitted", *(["held out"] if held else []), "start", "noise", "p"]
+    dice = Table(*(Column(c, no_wrap=True) for c in columns))
     for d in report["dice"]:
         start = d.get("start")
-        dice.add_row(d["name"], str(d["rolls"]), f"{d['tvd']:.4f}",
-                     *([f"{d['held_out']['tvd']:.4f}"] if held else []),
+        dice.add_row(d["name"], str(d["rolls"]), f"{d['tvd']:.4f}", *([f"{d['held_out']['tvd']:.4f}"] if held else []),
                      "-" if start is None else f"{start['tvd']:.4f}", f"{d['noise_tvd']:.4f}",
-                     f"{d['deviance']:.2f} ({d['df']})", f"{d['p_value']:.3g}")  # fmt: skip
+                     f"{d['p_value']:.3g}")  # fmt: skip
     con.print(dice)
+    con.print("TVD to the real rolls: fitted (in-sample)" + (", held out" if held else "") + ", at the start; noise: "
+              "what sampling alone gives; p: the fit's deviance against chi-squared")  # fmt: skip
     if held:
         rows = report["dice"]
         start = f", at the start {_mean_tvd([d['start'] for d in rows]):.4f}" if all("start" in d for d in rows) else ""
