@@ -386,7 +386,8 @@ def held_out(records: Sequence[Mapping[str, Any]], dice: Sequence[RealDie]) -> l
         return None
     drops = min(r["drops"] for r in feasible)
     candidates = [r for r in feasible if r["drops"] == drops]
-    dev = np.array([[r["dice"][k]["deviance"] for r in candidates] for k in range(len(dice))])
+    dev = np.array([[deviance(die.counts, die.symmetrized(smoothed(np.asarray(r["dice"][k]["counts"]))))
+                     for r in candidates] for k, die in enumerate(dice)])  # fmt: skip
     flat = np.zeros((len(candidates), 1))  # no prior: the other dice alone choose
     rows = []
     for k, die in enumerate(dice):
