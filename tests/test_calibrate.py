@@ -482,3 +482,6 @@ def test_cli_calibrate_reports_each_die_held_out(tmp_path, run):
     for die in report["dice"]:
         held = die["held_out"]
         assert held["name"] == die["name"] and 0 <= held["tvd"] <= 1 and held["params"]["restitution"] in grid
+    kept = read_profile(report["profile"])[0]["calibration"]  # the profile keeps its scores
+    assert kept["tvd_held_out"] == [round(d["held_out"]["tvd"], 4) for d in report["dice"]]
+    assert kept["tvd_fitted"] == [round(d["tvd"], 4) for d in report["dice"]] and kept["held_out_candidates"] == "grid"

@@ -245,12 +245,14 @@ def run(spec, log, run_name, history, budget, max_evals, workers, client, as_jso
             "rolls": [d.n for d in dice],
         }
 
-    def on_best(record):
-        settings = spec.settings(record["x"])
-        text = profile_to_toml(settings, name=run_name, calibration=summary(record), domain=domain,
-                               comment=f"Written by: {command}",
+    def write_profile(record, scores=None):
+        text = profile_to_toml(spec.settings(record["x"]), name=run_name, calibration=summary(record) | (scores or {}),
+                               domain=domain, comment=f"Written by: {command}",
                                description=f"physics calibrated to the real rolls of {names}")  # fmt: skip
         atomic_write(profile_path, text, inputs=inputs)
+
+    def on_best(record):
+        write_profile(record)
         if update:
             update(best=record)
 
@@ -287,6 +289,11 @@ def run(spec, log, run_name, history, budget, max_evals, workers, client, as_jso
         if others is not None:
             row["held_out"] = others[k]
         per_die.append(row)
+    kind = None if others is None else ("grid" if spec.method == "grid" else "proposed")
+    if others is not None:  # the profile keeps what it scores on its dice, fitted and each held out
+        write_profile(best, {"tvd_fitted": [round(d["tvd"], 4) for d in per_die],
+                             "tvd_held_out": [round(d["held_out"]["tvd"], 4) for d in per_die],
+                             "held_out_candidates": kind})  # fmt: skip
     report = {
         "name": run_name,
         "fitted": fitted,
@@ -296,7 +303,7 @@ def run(spec, log, run_name, history, budget, max_evals, workers, client, as_jso
         "start_deviance": None if start is None else start["deviance"],
         "start_drops_per_die": None if start is None else start["drops"],
         "dice": per_die,
-        "held_out_candidates": None if others is None else ("grid" if spec.method == "grid" else "proposed"),
+        "held_out_candidates": kind,
         "settings": spec.settings(best["x"]).as_dict(),
         "evaluations": result.evaluations,
         "replayed": result.replayed,
