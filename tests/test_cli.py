@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 
+import numpy as np
 import pytest
 
 from diefab.dice.design import load_design
@@ -64,6 +65,26 @@ def test_stats_from_a_roll_log(run, tmp_path):
     assert json.loads(out)["n"] == 79
 
 
+def test_stats_scores_each_landing_model_of_the_design_against_the_rolls(run):
+    from diefab.models.probabilities import value_probabilities
+
+    die = load_design("fudge-gem")
+    fast = value_probabilities(die, "fast")
+    counts = np.round(fast * 100_000).astype(int)  # rolls that follow the fast model to within rounding
+    code, out, err = run("stats", "--counts", ",".join(map(str, counts)), "--design", "fudge-gem", "--json")
+    assert code == 0, err
+    data = json.loads(out)
+    assert data["target"] == "4df" and data["design"] == "fudge-gem"  # the design's own target
+    models = data["models"]
+    assert set(models) == {"solid-angle", "basins", "fast"} and sum(m["to_trust"] for m in models.values()) == 1
+    assert models["fast"]["tvd"] < 1e-4 and models["fast"]["p_value"] > 0.99
+    assert models["solid-angle"]["tvd"] > 0.1 and models["solid-angle"]["p_value"] < 1e-6
+    for m in models.values():  # each TVD is the one between the frequencies and the model's prediction
+        predicted = np.array(m["predicted"])
+        assert m["tvd"] == pytest.approx(0.5 * np.abs(counts / counts.sum() - predicted).sum())
+        assert 0 < m["expected_tvd"] < 0.01  # the noise of 100,000 rolls
+
+
 def test_optimize_writes_a_loadable_template(run, tmp_path):
     code, out, _ = run("optimize", "fudge-gem", "--model", "solid-angle", "--seed", "1", "--out", tmp_path, "--json")
     assert code == 0
@@ -90,6 +111,9 @@ def test_optimize_writes_a_loadable_template(run, tmp_path):
         (("stats", "--counts", "1,2,3", "--target", "4df"), "3 counts"),
         (("stats", "--counts", "1,-2,3,1,1,1,1,1,1", "--target", "4df"), "negative"),
         (("stats", "--target", "4df"), "exactly one"),
+        (("stats", "--counts", "1,2"), "give --target, or --design"),
+        (("stats", "--counts", "1,1,1", "--target", "uniform:3", "--design", "fudge-gem"), "not the values"),
+        (("stats", "--counts", "1,1,1", "--design", "no-such-die"), "unknown template"),
         (("stats", "--counts", "1,2", "--target", "nonsense"), "unknown target"),
         (("optimize", "fudge-gem", "--min-margin", "-1"), "non-negative"),
         (("optimize", "fudge-gem", "--free", "a,q"), "q is not a parameter"),

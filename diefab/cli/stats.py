@@ -19,7 +19,19 @@ from diefab.dice.design import format_value
     default=None,
     help="Text or CSV log of rolled values.",
 )
-@click.option("--target", required=True, help="Target distribution, e.g. 4df or 1,4,10,16,19,16,10,4,1.")
+@click.option(
+    "--target",
+    default=None,
+    help="Target distribution, e.g. 4df or 1,4,10,16,19,16,10,4,1 (default: the --design's target).",
+)
+@click.option(
+    "--design",
+    "design_spec",
+    default=None,
+    metavar="DESIGN",
+    help="The die rolled (a template name or design file): also score each landing model's prediction "
+    "of it against the rolls.",
+)
 @click.option("--alpha", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.05, show_default=True)
 @click.option("--delta", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.03, show_default=True,
               help="Tolerance in TVD of the verdict: within it of the target, or off by at least it.")  # fmt: skip
@@ -27,12 +39,14 @@ from diefab.dice.design import format_value
               help="Only the anytime-valid verdict (valid however often the log was checked).")  # fmt: skip
 @seed_option("Seed of the Monte-Carlo p-value.")
 @json_option
-def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, delta: float, sequential: bool,
-          seed: int, as_json: bool) -> None:  # fmt: skip
+def stats(counts: str | None, rolls: Path | None, target: str | None, design_spec: str | None, alpha: float,
+          delta: float, sequential: bool, seed: int, as_json: bool) -> None:  # fmt: skip
     """Test rolls against a target: chi2, G, TVD, JSD, intervals, power, and a plain verdict.
 
     The verdict is anytime-valid: a roll log (--rolls) is checked after
     every roll, so it may be run while rolling and stopped when it decides.
+    With --design, each landing model's prediction of the die is scored
+    against the same rolls: the real rolls judge the models.
     """
     from diefab.core.errors import StatsError
     from diefab.dice.targets import parse_target
@@ -49,6 +63,14 @@ def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, del
 
     if (counts is None) == (rolls is None):
         raise click.UsageError("give exactly one of --counts and --rolls")
+    die = None
+    if design_spec is not None:
+        from diefab.cli.common import get_design
+
+        die = get_design(design_spec)
+        target = target or die.target
+    if target is None:
+        raise click.UsageError("give --target, or --design for the die's own target")
     column = None
     if counts is not None:
         x = parse_counts(counts)
@@ -98,6 +120,9 @@ def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, del
     }
     said = verdict(x, goal.probabilities, target_label(target), p_value=fit.p_value, sequential=seq, alpha=alpha)
     result["verdict"] = said.text
+    if die is not None:
+        result["design"] = die.name
+        result["models"] = model_scores(die, goal.values, x, alpha, seed)
     if as_json:
         emit_json(result)
         return
@@ -127,6 +152,42 @@ def stats(counts: str | None, rolls: Path | None, target: str, alpha: float, del
             f"{result['power_at_n']:.2f} at n = {fit.n}, and 80% power needs {power_n} rolls."
         )
     con.print(f"verdict: {said.text}")
+    if die is not None:
+        _print_models(con, die.name, result["models"])
+
+
+def model_scores(die, values, counts, alpha: float, seed: int) -> dict[str, dict]:
+    """Each landing model's prediction of `die` scored against `counts` of `values`, and which one is to trust."""
+    from diefab.core.errors import StatsError
+    from diefab.models.choice import best_model
+    from diefab.models.probabilities import MODELS, value_probabilities
+    from diefab.stats.goodness import goodness_of_fit
+
+    if list(die.support) != [int(v) for v in values]:
+        raise StatsError(f"the rolls' values {[int(v) for v in values]} are not the values {list(die.support)} "
+                         f"of design {die.name!r}")  # fmt: skip
+    trust = best_model(die).name
+    out = {}
+    for name in MODELS:
+        p = value_probabilities(die, name)
+        fit = goodness_of_fit(counts, p, alpha=alpha, seed=seed) if np.all(p[counts > 0] > 0) else None
+        out[name] = {"predicted": p.tolist(), "tvd": 0.5 * float(np.abs(counts / counts.sum() - p).sum()),
+                     "expected_tvd": None if fit is None else fit.expected_tvd_exact,
+                     "p_value": 0.0 if fit is None else fit.p_value, "to_trust": name == trust}  # fmt: skip
+    return out
+
+
+def _print_models(con, name: str, models: dict[str, dict]) -> None:
+    from rich.table import Table
+
+    table = Table("model", "TVD to the rolls", "noise", "p")
+    for model, m in models.items():
+        noise = "-" if m["expected_tvd"] is None else f"{m['expected_tvd']:.4f}"
+        table.add_row(model + (" (the one to trust)" if m["to_trust"] else ""), f"{m['tvd']:.4f}", noise,
+                      f"{m['p_value']:.3g}")  # fmt: skip
+    con.print(f"how well each landing model predicted {name} (noise: the TVD the rolls would show if the model "
+              "were right; p: chi-squared of the rolls against the model):")  # fmt: skip
+    con.print(table)
 
 
 def _sequential(seq, target: str, column: str | None, as_json: bool) -> None:
