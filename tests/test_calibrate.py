@@ -485,3 +485,48 @@ def test_cli_calibrate_reports_each_die_held_out(tmp_path, run):
     kept = read_profile(report["profile"])[0]["calibration"]  # the profile keeps its scores
     assert kept["tvd_held_out"] == [round(d["held_out"]["tvd"], 4) for d in report["dice"]]
     assert kept["tvd_fitted"] == [round(d["tvd"], 4) for d in report["dice"]] and kept["held_out_candidates"] == "grid"
+
+
+def test_the_prior_is_minus_twice_its_log_density_and_is_checked():
+    from diefab.dice.design import load_design
+    from diefab.search.calibrate import CalibrationError, RealDie, make_spec
+
+    die = RealDie("cube", load_design("d6"), np.array([10, 11, 9, 10, 12, 8]))
+    spec = make_spec([die], free=["restitution", "friction"], prior_sd=0.25)
+    x0 = np.array(spec.x0)
+    assert spec.prior(x0) == 0.0
+    assert spec.prior(x0 + [0.25, 0.0]) == pytest.approx(1.0) and spec.prior(x0 + [0.5, -0.25]) == pytest.approx(5.0)
+    assert make_spec([die], free=["restitution"]).prior([1.0]) == 0.0  # no prior
+    for bad in (0.0, -1.0, float("nan"), float("inf"), True):
+        with pytest.raises(CalibrationError, match="prior_sd"):
+            make_spec([die], free=["restitution"], prior_sd=bad)
+
+
+def test_held_out_with_a_prior_needs_the_other_dice_to_earn_the_distance():
+    from diefab.dice.design import load_design
+    from diefab.search.calibrate import RealDie, held_out
+
+    cube = load_design("d6")
+    near, far = np.full(6, 1 / 6), np.array([2, 1, 1, 1, 1, 2]) / 8
+    dice = [RealDie(f"die{k}", cube, np.round(600 * p).astype(int)) for k, p in enumerate((near, far, far))]
+    records = [{"x": [x], "params": {"restitution": x}, "drops": 10_000, "feasible": True,
+                "dice": [{"counts": np.round(10_000 * p).astype(int).tolist()} for _ in dice]}
+               for x, p in ((0.0, near), (1.0, far))]  # fmt: skip
+    free = held_out(records, dice)
+    assert [r["params"]["restitution"] for r in free] == [1.0, 1.0, 1.0]
+    # a prior of sd 0.01 toward x = 0 costs 10,000 at x = 1: more than the other dice's deviance can pay
+    tight = held_out(records, dice, x0=[0.0], prior_sd=0.01)
+    assert [r["params"]["restitution"] for r in tight] == [0.0, 0.0, 0.0]
+    assert tight[0]["tvd"] < 0.01 < 0.05 < free[0]["tvd"]
+
+
+def test_cli_calibrate_with_a_tight_prior_stays_at_the_start_and_keeps_it(tmp_path, run):
+    args = ["calibrate", "--die", "d6", "3,30,3,3,30,3", "--free", "restitution", "--method", "grid",
+            "--grid-points", "3", "--sims-per-eval", "30", "--workers", "1", "--out", tmp_path, "--json"]  # fmt: skip
+    code, out, err = run(*args, "--prior", "0.001")
+    assert code == 0, err
+    report = json.loads(out)
+    assert report["prior_sd"] == 0.001 and report["fitted"]["restitution"]["value"] == pytest.approx(0.3)
+    assert read_profile(report["profile"])[0]["calibration"]["prior_sd"] == 0.001
+    code, _, err = run("calibrate", "--resume", tmp_path / "calibrated", "--prior", "0.5")
+    assert code == 2 and "--prior 0.5 differs from the run's 0.001" in err

@@ -113,6 +113,10 @@ def _dice(die_args, realrolls):
     help="Points per parameter of --method grid, evenly spaced on each parameter's search scale.",
 )
 @click.option("--sigma", type=float, default=0.2, show_default=True, help="Initial step, fraction of each range.")
+@click.option("--prior", "prior_sd", type=float, default=None, metavar="SD",
+              help="A normal prior toward the start (the default physics, or --physics), SD in units of each "
+              "parameter's searched range on its search scale: a setting must earn its distance on the counts "
+              "(default: none).")  # fmt: skip
 @click.option("--max-evals", type=int, default=None, help="Stop after this many evaluations.")
 @click.option("--workers", type=int, default=None, help="Worker processes (default all cores).")
 @click.option("--scheduler", default=None, metavar="ADDRESS", help="Dask scheduler address.")
@@ -121,7 +125,7 @@ def _dice(die_args, realrolls):
 @json_option
 @click.pass_context
 def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval, max_sims_per_eval, budget, resume,
-              method, grid_points, sigma, max_evals, workers, scheduler, physics_profile, out_dir,
+              method, grid_points, sigma, prior_sd, max_evals, workers, scheduler, physics_profile, out_dir,
               as_json) -> None:  # fmt: skip
     """Fit the physics settings to dice with real rolls and write a physics profile.
 
@@ -145,6 +149,8 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
         raise click.BadParameter(f"{max_sims_per_eval} must be >= --sims-per-eval", param_hint="--max-sims-per-eval")
     if not (np.isfinite(budget) and budget > 0):
         raise click.BadParameter(f"{budget} must be a positive number of minutes", param_hint="--budget")
+    if prior_sd is not None and not (np.isfinite(prior_sd) and prior_sd > 0):
+        raise click.BadParameter(f"{prior_sd} must be a positive standard deviation", param_hint="--prior")
     if scheduler is not None:
         refuse_options(ctx, ["workers"], "does not apply with --scheduler (the cluster's workers run the drops)")
     if resume is None:  # a resumed run keeps its stored method
@@ -164,12 +170,13 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
         if ctx.get_parameter_source("name").name == "COMMANDLINE" and name != run_name:
             raise click.UsageError(f"--name {name} differs from the folder of --resume {resume}", ctx=ctx)
         stored = {"seed": seed, "sims_per_eval": sims_per_eval, "method": method, "grid_points": grid_points,
-                  "sigma0": sigma, "max_sims": max_sims_per_eval}  # fmt: skip
+                  "sigma0": sigma, "max_sims": max_sims_per_eval, "prior_sd": prior_sd}  # fmt: skip
         for key, value in stored.items():
-            option = {"sigma0": "sigma", "max_sims": "max_sims_per_eval"}.get(key, key)
+            option = {"sigma0": "sigma", "max_sims": "max_sims_per_eval", "prior_sd": "prior_sd"}.get(key, key)
             source = ctx.get_parameter_source(option)
             if source is not None and source.name == "COMMANDLINE" and value != getattr(spec, key):
-                raise RunError(f"--{option.replace('_', '-')} {value} differs from the run's {getattr(spec, key)} "
+                flag = "--prior" if option == "prior_sd" else f"--{option.replace('_', '-')}"
+                raise RunError(f"{flag} {value} differs from the run's {getattr(spec, key)} "
                                f"(stored in {log.spec_path})")  # fmt: skip
         for key, flag in (("die_args", "--die"), ("realrolls", "--realrolls"), ("free", "--free"),
                           ("bounds", "--bound"), ("physics_profile", "--physics")):  # fmt: skip
@@ -201,7 +208,7 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
         spec = make_spec(dice, free=names, base=base, bounds=_parse_bounds(bounds), seed=seed,
                          sims_per_eval=sims_per_eval, max_sims=max_sims_per_eval or 8 * sims_per_eval, method=method,
                          sigma0=sigma, grid_points=grid_points, budget_minutes=float(budget),
-                         max_evaluations=max_evals)  # fmt: skip
+                         max_evaluations=max_evals, prior_sd=prior_sd)  # fmt: skip
         history = []
     budget, max_evals = spec.budget_minutes, spec.max_evaluations
     client = None
@@ -238,11 +245,12 @@ def run(spec, log, run_name, history, budget, max_evals, workers, client, as_jso
     def summary(best):
         return {
             "deviance": best["deviance"],
-            "deviance_per_roll": best["objective"],
+            "deviance_per_roll": best["deviance"] / sum(d.n for d in dice),
             "drops_per_die": best["drops"],
             "seed": spec.seed,
             "dice": [d.name for d in dice],
             "rolls": [d.n for d in dice],
+            **({"prior_sd": spec.prior_sd} if spec.prior_sd is not None else {}),
         }
 
     def write_profile(record, scores=None):
@@ -281,7 +289,7 @@ def run(spec, log, run_name, history, budget, max_evals, workers, client, as_jso
             fitted[name]["interval"] = interval
     start = next((r for r in records if r.get("kind") == "start" and r.get("feasible")), None)
     per_die = []
-    others = held_out(records, dice)
+    others = held_out(records, dice, x0=spec.x0, prior_sd=spec.prior_sd)
     for k, die in enumerate(dice):
         row = die_report(die, best["dice"][k]["counts"])
         if start is not None:
@@ -298,7 +306,9 @@ def run(spec, log, run_name, history, budget, max_evals, workers, client, as_jso
         "name": run_name,
         "fitted": fitted,
         "deviance": best["deviance"],
-        "deviance_per_roll": best["objective"],
+        "deviance_per_roll": best["deviance"] / sum(d.n for d in dice),
+        "prior_sd": spec.prior_sd,
+        "prior": best.get("prior"),
         "drops_per_die": best["drops"],
         "start_deviance": None if start is None else start["deviance"],
         "start_drops_per_die": None if start is None else start["drops"],
@@ -332,6 +342,8 @@ def print_report(report) -> None:
     con = console()
     con.print(f"{BOLD}{report['name']}{PLAIN}: deviance {report['deviance']:.2f} "
               f"({report['deviance_per_roll']:.4f} per roll) at {report['drops_per_die']} drops per die"
+              + ("" if report["prior_sd"] is None else
+                 f"; prior sd {report['prior_sd']:g} toward the start, {report['prior']:.2f} at the fit")
               + ("" if report["start_deviance"] is None else
                  f"; at the start {report['start_deviance']:.2f} ({report['start_drops_per_die']} drops)"))  # fmt: skip
     gridded = any("interval" in fit for fit in report["fitted"].values())

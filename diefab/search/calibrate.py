@@ -104,7 +104,11 @@ class CalibrationSpec:
     `grid_points` evenly spaced points per parameter in the unit cube,
     narrowed by successive halving (:func:`diefab.search.simmethods.run_grid`).
     `bounds` maps the unit cube to the settings and `physics` holds the
-    settings that are not fitted.
+    settings that are not fitted.  `prior_sd` (None: no prior) adds a
+    normal prior toward the start `x0` in the unit cube, with this standard
+    deviation in each coordinate: the objective becomes the deviance plus
+    ``sum(((x - x0) / prior_sd)**2)`` (minus twice the log prior), so a
+    setting must earn its distance from the start on the counts.
     """
 
     dice: tuple[dict[str, Any], ...]
@@ -122,6 +126,7 @@ class CalibrationSpec:
     format: int = RUN_FORMAT
     budget_minutes: float | None = None
     max_evaluations: int | None = None
+    prior_sd: float | None = None
 
     def __post_init__(self) -> None:
         def bad(msg: str) -> None:
@@ -170,6 +175,11 @@ class CalibrationSpec:
                 f"2 points or more and {MAX_GRID} in all at most")  # fmt: skip
         if not (math.isfinite(self.sigma0) and 0 < self.sigma0 <= 0.5):
             bad(f"sigma0={self.sigma0} must be in (0, 0.5]")
+        if self.prior_sd is not None and not (
+            isinstance(self.prior_sd, (int, float)) and not isinstance(self.prior_sd, bool)
+            and math.isfinite(self.prior_sd) and self.prior_sd > 0
+        ):  # fmt: skip
+            bad(f"prior_sd={self.prior_sd!r} must be a positive number (the prior's standard deviation)")
         check_budget(self, bad)
 
     @property
@@ -199,6 +209,12 @@ class CalibrationSpec:
 
     def settings(self, x: Sequence[float]):
         return settings_at(self.base, self.names, self.values(x))
+
+    def prior(self, x: Sequence[float]) -> float:
+        """Minus twice the log prior at unit-cube point `x`, up to a constant (0 without a prior)."""
+        if self.prior_sd is None:
+            return 0.0
+        return float((((np.asarray(x, dtype=float) - np.asarray(self.x0)) / self.prior_sd) ** 2).sum())
 
     def to_json(self) -> str:
         data = asdict(self)
@@ -303,7 +319,7 @@ def make_spec(
 
 
 class CalibrationObjective:
-    """Deviance per real roll of the dice's counts under a candidate's simulated frequencies.
+    """Deviance per real roll of the dice's counts under a candidate's simulated frequencies (plus the prior).
 
     Parameters
     ----------
@@ -331,11 +347,13 @@ class CalibrationObjective:
             return {**record, "objective": 1e6, "feasible": False, "error": str(exc)}
         dice = [simulate_die(d, settings, int(drops), self.spec.seed, self.workers, self.scheduler) for d in self.dice]
         total = sum(d["deviance"] for d in dice)
+        prior = self.spec.prior(x)
         return {
             **record,
             "drops": int(drops),  # per die: the driver compares like with like by this count
-            "objective": total / self.rolls,
+            "objective": (total + prior) / self.rolls,
             "deviance": total,
+            **({"prior": prior} if self.spec.prior_sd is not None else {}),
             "feasible": True,
             "dice": dice,
             "seconds": sum(d["seconds"] for d in dice),
@@ -362,8 +380,12 @@ def calibrate(spec: CalibrationSpec, **kwargs: Any):
     return optimize_by_simulation(spec, **kwargs)
 
 
-def held_out(records: Sequence[Mapping[str, Any]], dice: Sequence[RealDie]) -> list[dict[str, Any]] | None:
+def held_out(records: Sequence[Mapping[str, Any]], dice: Sequence[RealDie], *, x0: Sequence[float] | None = None,
+             prior_sd: float | None = None) -> list[dict[str, Any]] | None:  # fmt: skip
     """Each die scored at the evaluated candidate of least deviance of the other dice: leave one die out.
+
+    With `prior_sd`, the choice adds the run's prior toward `x0` (the unit-cube
+    start), as the fit itself does.
 
     The candidates are the run's feasible evaluations at its first drop
     count, the count every candidate was first simulated at: every point of
@@ -388,10 +410,12 @@ def held_out(records: Sequence[Mapping[str, Any]], dice: Sequence[RealDie]) -> l
     candidates = [r for r in feasible if r["drops"] == drops]
     dev = np.array([[deviance(die.counts, die.symmetrized(smoothed(np.asarray(r["dice"][k]["counts"]))))
                      for r in candidates] for k, die in enumerate(dice)])  # fmt: skip
-    flat = np.zeros((len(candidates), 1))  # no prior: the other dice alone choose
+    coords = np.array([r["x"] for r in candidates], dtype=float)
+    start = np.zeros(coords.shape[1]) if x0 is None else np.asarray(x0, dtype=float)
+    sd = math.inf if prior_sd is None else prior_sd
     rows = []
     for k, die in enumerate(dice):
-        chosen = candidates[pick_candidate(dev, [i for i in range(len(dice)) if i != k], flat, np.zeros(1), math.inf)]
+        chosen = candidates[pick_candidate(dev, [i for i in range(len(dice)) if i != k], coords, start, sd)]
         scored = max((r for r in feasible if r["x"] == chosen["x"]), key=lambda r: r["drops"])  # its most drops
         rows.append({**die_report(die, scored["dice"][k]["counts"]), "params": dict(chosen["params"]),
                      "drops": scored["drops"]})  # fmt: skip

@@ -249,7 +249,7 @@ def _read_capped(path: Path, limit: int) -> bytes:
 
 
 #: Optional keys of a record that must be numbers when present.
-_NUMBERS = ("elapsed", "seconds", "min_margin", "deviance", "cocked", "unsettled")
+_NUMBERS = ("elapsed", "seconds", "min_margin", "deviance", "prior", "cocked", "unsettled")
 _REQUIRED = {"i": int, "kind": str, "x": list, "params": dict, "drops": int, "objective": float, "feasible": bool}
 
 

@@ -17,7 +17,7 @@ __all__ = ["curvature", "grid_interval"]
 def curvature(
     records: Sequence[Mapping[str, Any]], spec, best: Mapping[str, Any]
 ) -> dict[str, dict[str, float | None]]:
-    """Standard errors of the fitted parameters from the curvature of the deviance at `best`.
+    """Standard errors of the fitted parameters from the curvature of the deviance (plus the prior) at `best`.
 
     A quadratic in the parameters is fitted by least squares to the total
     deviance of the feasible evaluations at `best`'s drop count nearest to
@@ -40,7 +40,7 @@ def curvature(
     xs = np.array([r["x"] for r in pts])
     order = np.argsort(np.linalg.norm(xs - x0, axis=1))[: max(3 * ncoef, 20)]
     xs = xs[order] - x0
-    ys = np.array([pts[i]["deviance"] for i in order])
+    ys = np.array([pts[i]["deviance"] + pts[i].get("prior", 0.0) for i in order])
     iu = np.triu_indices(d)
     quad = np.einsum("ni,nj->nij", xs, xs)[:, iu[0], iu[1]]
     design = np.hstack([np.ones((len(xs), 1)), xs, quad])
@@ -64,7 +64,7 @@ def curvature(
 
 def grid_interval(records: Sequence[Mapping[str, Any]], spec, best: Mapping[str, Any],
                   rise: float = 1.0) -> dict[str, tuple[float, float]] | None:  # fmt: skip
-    """Each parameter's range over the grid points whose deviance is within `rise` of `best`'s.
+    """Each parameter's range over the grid points whose deviance (plus the prior) is within `rise` of `best`'s.
 
     Each point counts with its deviance at the most drops it was dropped
     with (a point the halving dropped early keeps its early, noisier value).
@@ -78,8 +78,9 @@ def grid_interval(records: Sequence[Mapping[str, Any]], spec, best: Mapping[str,
         if r.get("feasible") and "deviance" in r:
             key = tuple(np.round(r["x"], 9))
             if key not in latest or r["drops"] >= latest[key][0]:
-                latest[key] = (r["drops"], r["deviance"], spec.values(r["x"]))
+                latest[key] = (r["drops"], r["deviance"] + r.get("prior", 0.0), spec.values(r["x"]))
     if len(latest) < 3:
         return None
-    near = np.array([v for _n, dev, v in latest.values() if dev <= best["deviance"] + rise])
+    least = best["deviance"] + best.get("prior", 0.0)
+    near = np.array([v for _n, dev, v in latest.values() if dev <= least + rise])
     return {n: (float(near[:, i].min()), float(near[:, i].max())) for i, n in enumerate(spec.names)}
