@@ -497,7 +497,7 @@ def test_the_prior_is_minus_twice_its_log_density_and_is_checked():
     assert spec.prior(x0) == 0.0
     assert spec.prior(x0 + [0.25, 0.0]) == pytest.approx(1.0) and spec.prior(x0 + [0.5, -0.25]) == pytest.approx(5.0)
     assert make_spec([die], free=["restitution"]).prior([1.0]) == 0.0  # no prior
-    for bad in (0.0, -1.0, float("nan"), float("inf"), True):
+    for bad in (0.0, -1.0, 1e-300, float("nan"), float("inf"), True):
         with pytest.raises(CalibrationError, match="prior_sd"):
             make_spec([die], free=["restitution"], prior_sd=bad)
 

@@ -22,7 +22,7 @@ from diefab.cli.common import (
     run_logged,
 )
 from diefab.core.files import atomic_write, check_outputs, output_path, safe_name
-from diefab.search.calibrate import DEFAULT_FREE
+from diefab.search.calibrate import DEFAULT_FREE, MIN_PRIOR_SD
 
 
 def _parse_bounds(items: tuple[str, ...]) -> dict[str, tuple[float, float]]:
@@ -149,8 +149,8 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
         raise click.BadParameter(f"{max_sims_per_eval} must be >= --sims-per-eval", param_hint="--max-sims-per-eval")
     if not (np.isfinite(budget) and budget > 0):
         raise click.BadParameter(f"{budget} must be a positive number of minutes", param_hint="--budget")
-    if prior_sd is not None and not (np.isfinite(prior_sd) and prior_sd > 0):
-        raise click.BadParameter(f"{prior_sd} must be a positive standard deviation", param_hint="--prior")
+    if prior_sd is not None and not (np.isfinite(prior_sd) and prior_sd >= MIN_PRIOR_SD):
+        raise click.BadParameter(f"{prior_sd} must be a standard deviation >= {MIN_PRIOR_SD:g}", param_hint="--prior")
     if scheduler is not None:
         refuse_options(ctx, ["workers"], "does not apply with --scheduler (the cluster's workers run the drops)")
     if resume is None:  # a resumed run keeps its stored method

@@ -67,6 +67,7 @@ from diefab.search.uncertainty import curvature, grid_interval
 __all__ = [
     "DEFAULT_FREE",
     "MAX_GRID",
+    "MIN_PRIOR_SD",
     "SMOOTHING",
     "PARAMETERS",
     "CalibrationError",
@@ -88,6 +89,10 @@ __all__ = [
     "simulate_die",
     "smoothed",
 ]
+
+
+#: Tightest prior a calibration takes (in the unit cube): tighter holds the start and fits nothing.
+MIN_PRIOR_SD = 1e-6
 
 
 # ----------------------------------------------------------------------
@@ -177,9 +182,9 @@ class CalibrationSpec:
             bad(f"sigma0={self.sigma0} must be in (0, 0.5]")
         if self.prior_sd is not None and not (
             isinstance(self.prior_sd, (int, float)) and not isinstance(self.prior_sd, bool)
-            and math.isfinite(self.prior_sd) and self.prior_sd > 0
+            and math.isfinite(self.prior_sd) and self.prior_sd >= MIN_PRIOR_SD
         ):  # fmt: skip
-            bad(f"prior_sd={self.prior_sd!r} must be a positive number (the prior's standard deviation)")
+            bad(f"prior_sd={self.prior_sd!r} must be a number >= {MIN_PRIOR_SD:g} (the prior's standard deviation)")
         check_budget(self, bad)
 
     @property
