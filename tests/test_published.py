@@ -59,3 +59,16 @@ def test_the_shipped_printed_dice_are_the_sources_designs():
     for d in dice:
         assert d.n == d.counts.sum() > 0 and "ours" in d.reference, d.name
         assert value_tvd(d, value_probabilities(d.design, "basins"), d.reference["ours"]) < 0.02, d.name
+
+
+def test_landing_model_scores_agree_with_the_guard_on_dice_with_mirror_groups():
+    from diefab.search.fidelity import LANDING_MODELS, landing_model_scores, model_tvd
+    from diefab.search.published import printed_dice
+
+    for die in printed_dice():  # their mirror-image outcomes are compared up to relabelling
+        assert die.groups
+        scores = landing_model_scores(die)
+        assert set(scores) == set(LANDING_MODELS) and sum(s["to_trust"] for s in scores.values()) == 1
+        for model, s in scores.items():
+            assert s["tvd"] == pytest.approx(model_tvd(die, model))
+            assert sum(s["predicted"]) == pytest.approx(1.0) and 0 < s["expected_tvd"] < 0.1

@@ -157,24 +157,15 @@ def stats(counts: str | None, rolls: Path | None, target: str | None, design_spe
 
 
 def model_scores(die, values, counts, alpha: float, seed: int) -> dict[str, dict]:
-    """Each landing model's prediction of `die` scored against `counts` of `values`, and which one is to trust."""
+    """Each landing model's prediction of `die` scored against `counts` of `values` (the rolls of the die)."""
     from diefab.core.errors import StatsError
-    from diefab.models.choice import best_model
-    from diefab.models.probabilities import MODELS, value_probabilities
-    from diefab.stats.goodness import goodness_of_fit
+    from diefab.search.fidelity import landing_model_scores
+    from diefab.search.realdie import real_die
 
     if list(die.support) != [int(v) for v in values]:
         raise StatsError(f"the rolls' values {[int(v) for v in values]} are not the values {list(die.support)} "
                          f"of design {die.name!r}")  # fmt: skip
-    trust = best_model(die).name
-    out = {}
-    for name in MODELS:
-        p = value_probabilities(die, name)
-        fit = goodness_of_fit(counts, p, alpha=alpha, seed=seed) if np.all(p[counts > 0] > 0) else None
-        out[name] = {"predicted": p.tolist(), "tvd": 0.5 * float(np.abs(counts / counts.sum() - p).sum()),
-                     "expected_tvd": None if fit is None else fit.expected_tvd_exact,
-                     "p_value": 0.0 if fit is None else fit.p_value, "to_trust": name == trust}  # fmt: skip
-    return out
+    return landing_model_scores(real_die(die.name, die, counts), alpha=alpha, seed=seed)
 
 
 def _print_models(con, name: str, models: dict[str, dict]) -> None:

@@ -42,6 +42,7 @@ __all__ = [
     "SimulationCache",
     "guard_scores",
     "guard_settings",
+    "landing_model_scores",
     "load_real_dice",
     "mean_scores",
     "model_tvd",
@@ -118,6 +119,30 @@ def model_tvd(die: RealDie, model: str) -> float:
     from diefab.models.probabilities import value_probabilities
 
     return value_tvd(die, value_probabilities(die.design, model))
+
+
+def landing_model_scores(die: RealDie, *, alpha: float = 0.05, seed: int = 0) -> dict[str, dict[str, Any]]:
+    """Each landing model's prediction of `die` against its real rolls, and which model is the one to trust.
+
+    Per model: ``predicted`` (value probabilities), ``tvd`` to the real
+    frequencies (:func:`value_tvd`), ``expected_tvd`` (what the rolls would
+    show if the model were right; None where it gives a rolled value no
+    chance), ``p_value`` (chi-squared of the counts against it) and
+    ``to_trust`` (:func:`diefab.models.choice.best_model`).
+    """
+    from diefab.models.choice import best_model
+    from diefab.models.probabilities import value_probabilities
+    from diefab.stats.goodness import goodness_of_fit
+
+    trust = best_model(die.design).name
+    out = {}
+    for name in LANDING_MODELS:
+        p = value_probabilities(die.design, name)
+        fit = goodness_of_fit(die.counts, p, alpha=alpha, seed=seed) if np.all(p[die.counts > 0] > 0) else None
+        out[name] = {"predicted": p.tolist(), "tvd": value_tvd(die, p),
+                     "expected_tvd": None if fit is None else fit.expected_tvd_exact,
+                     "p_value": 0.0 if fit is None else fit.p_value, "to_trust": name == trust}  # fmt: skip
+    return out
 
 
 def noise_tvd(die: RealDie, samples: int = 20_000, seed: int = 0) -> float:
