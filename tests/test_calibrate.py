@@ -38,6 +38,11 @@ def test_profile_lies_between_design_and_options(tmp_path):
         ("physics = 3\n", "[physics] table"),
         ("[physics\n", "malformed TOML"),
         ('[physics]\nangular_velocity = "fast"\n', "angular_velocity"),
+        ("[physics]\n[domain]\nfills = 'solid'\n", "is not a list of fills"),
+        ("[physics]\n[domain]\nfills = []\n", "is not a list of fills"),
+        ("[physics]\n[domain]\nfills = ['wood']\n", "is not a list of fills"),
+        ("[physics]\n[domain]\nfills = ['solid']\nsurface = 'felt'\n", "unknown key 'surface' in [domain]"),
+        ("[physics]\n[domain]\nfills = ['solid']\nrolled = 3\n", "domain.rolled = 3"),
     ],
 )
 def test_bad_profile_is_named(tmp_path, text, words):
@@ -58,24 +63,6 @@ def test_a_profile_names_the_dice_it_was_fitted_on(tmp_path):
     assert "solid and print dice rolled on felt" in note and "this die is paper" in note
     assert domain_note("soft-tray", "paper") is None  # fitted on no die: nothing to lie outside of
     assert all(domain_note(name, "paper") is not None for name in fitted_profiles())  # each fitted on solid dice
-
-
-@pytest.mark.parametrize(
-    "domain, words",
-    [
-        ("fills = 'solid'", "is not a list of fills"),
-        ("fills = []", "is not a list of fills"),
-        ("fills = ['wood']", "is not a list of fills"),
-        ("fills = ['solid']\nsurface = 'felt'", "unknown key 'surface' in [domain]"),
-        ("fills = ['solid']\nrolled = 3", "domain.rolled = 3"),
-    ],
-)
-def test_bad_profile_domain_is_named(tmp_path, domain, words):
-    path = tmp_path / "p.toml"
-    path.write_text(f"[physics]\n[domain]\n{domain}\n")
-    with pytest.raises(PhysicsError) as info:
-        load_profile(path)
-    assert words in str(info.value) and str(path) in str(info.value)
 
 
 def test_cli_notes_a_die_outside_the_profiles_dice(run):
