@@ -85,6 +85,23 @@ def test_stats_scores_each_landing_model_of_the_design_against_the_rolls(run):
         assert 0 < m["expected_tvd"] < 0.01  # the noise of 100,000 rolls
 
 
+def test_validate_scores_the_simulation_against_real_rolls(run, tmp_path):
+    log = tmp_path / "rolls.txt"
+    log.write_text("\n".join(str(v) for v in [1, 2, 3, 4, 5, 6] * 5 + [6] * 10))
+    code, out, err = run("validate", "d6", "--sims", "60", "--workers", "1", "--rolls", log, "--json")
+    assert code == 0, err
+    data = json.loads(out)
+    real = data["real_rolls"]
+    assert real["n"] == 40 and real["counts"] == {"1": 5, "2": 5, "3": 5, "4": 5, "5": 5, "6": 15}
+    simulated = np.array([data["counts"][k] for k in map(str, range(1, 7))], dtype=float)
+    frequencies = np.array(list(real["counts"].values())) / 40
+    assert real["tvd"] == pytest.approx(0.5 * np.abs(frequencies - simulated / simulated.sum()).sum())
+    assert 0 < real["noise_tvd"] < 0.3 and 0 <= real["p_value"] <= 1 and real["df"] == 5
+    (tmp_path / "seven.txt").write_text("7\n")
+    code, _, err = run("validate", "d6", "--sims", "60", "--workers", "1", "--rolls", tmp_path / "seven.txt")
+    assert code == 2 and "roll 7 is not a value" in err and "drops" not in err  # refused before any drop
+
+
 def test_optimize_writes_a_loadable_template(run, tmp_path):
     code, out, _ = run("optimize", "fudge-gem", "--model", "solid-angle", "--seed", "1", "--out", tmp_path, "--json")
     assert code == 0

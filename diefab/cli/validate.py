@@ -43,6 +43,10 @@ from diefab.dice.design import format_value
 @click.option("--target", default=None, help="Override the design's target distribution.")
 @click.option("--delta", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.03, show_default=True,
               help="Tolerance in TVD of the verdict: within it of the target, or off by at least it.")  # fmt: skip
+@click.option("--rolls", "rolls_file", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              metavar="FILE",
+              help="Real rolls of the die as made (a roll log or CSV, as diefab stats reads): also score the "
+              "simulation against them, the physics held out on them if they took no part in fitting it.")  # fmt: skip
 @click.option("--sensitivity", is_flag=True,
               help="Validate under each standard throw and table (the shipped profiles soft-tray, wooden-table, "
               "hard-tray, low-spin, high-spin) and report the TVD to the target of each and the worst.")  # fmt: skip
@@ -50,8 +54,8 @@ from diefab.dice.design import format_value
 @physics_options
 @json_option
 @click.pass_context
-def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, report_file, target, delta, sensitivity,
-             physics_profile, as_json, **physics) -> None:  # fmt: skip
+def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, report_file, target, delta, rolls_file,
+             sensitivity, physics_profile, as_json, **physics) -> None:  # fmt: skip
     """Drop DESIGN many times in pybullet and test the counts against its target.
 
     With --sensitivity, drop it under each standard throw and table instead
@@ -76,10 +80,18 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
     d = apply_fill(get_design(design, params, target, made), **fill)
     inputs = design_inputs(design, d, made)  # no output may replace them
     settings = physics_settings(d, physics_profile, **physics)
+    real = None
+    if rolls_file is not None:  # read before any drop: a bad log is refused at once
+        from diefab.stats.goodness import counts_from_rolls, read_roll_column
+
+        real = counts_from_rolls(read_roll_column(rolls_file)[0], d.support)
+        if real.sum() == 0:
+            raise click.BadParameter(f"{rolls_file} holds no roll", param_hint="--rolls")
+        inputs = [*inputs, rolls_file]
     if sensitivity:
-        if plot_file is not None or report_file is not None:
-            raise click.BadParameter("--plot and --report show one validation, not --sensitivity",
-                                     param_hint="--plot/--report")  # fmt: skip
+        if plot_file is not None or report_file is not None or rolls_file is not None:
+            raise click.BadParameter("--plot, --report and --rolls go with one validation, not --sensitivity",
+                                     param_hint="--plot/--report/--rolls")  # fmt: skip
         return _sensitivity(d, settings, sims, seed, workers, scheduler, as_json, physics)
     if plot_file is not None:
         if plot_file.suffix.lower() not in (".png", ".svg"):
@@ -154,6 +166,8 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
         "sequential": seq.as_dict(),
         "verdict": said.text,
     }
+    if real is not None:
+        out["real_rolls"] = real_rolls_score(d, real, counts, rolls_file)
     if plot_file is not None:
         atomic_write(plot_file, plot_validation(d, result, fmt=plot_file.suffix.lower()[1:], model=choice.name),
                      inputs=inputs)  # fmt: skip
@@ -189,9 +203,25 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
     con.print(f"TVD = {fit.tvd:.4f} (expected under the target {fit.expected_tvd:.4f})   "
               f"JSD = {fit.jsd:.5f} (expected {fit.expected_jsd:.5f})")  # fmt: skip
     con.print(f"verdict: {said.text}")
+    if real is not None:
+        r = out["real_rolls"]
+        con.print(f"real rolls: {r['n']} in {rolls_file}: TVD {r['tvd']:.4f} to this simulation (sampling noise of "
+                  f"{r['n']} rolls {r['noise_tvd']:.4f}), p = {r['p_value']:.3g} (the simulation's own noise "
+                  f"not counted)")  # fmt: skip
     for written in (plot_file, report_file):
         if written is not None:
             con.print(f"wrote {written}")
+
+
+def real_rolls_score(d, real, simulated, path) -> dict:
+    """How well `simulated` value counts of design `d` predict its `real` rolls (read from `path`)."""
+    from diefab.search.likelihood import die_report
+    from diefab.search.realdie import real_die
+
+    report = die_report(real_die(d.name, d, real), simulated)
+    return {"file": str(path), "n": int(real.sum()), "counts": dict(zip(map(str, d.support), real.tolist())),
+            "tvd": report["tvd"], "noise_tvd": report["noise_tvd"], "deviance": report["deviance"],
+            "df": report["df"], "p_value": report["p_value"]}  # fmt: skip
 
 
 def _write_report(path, d, fit, result, verdict, settings, inputs) -> None:
