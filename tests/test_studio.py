@@ -291,7 +291,9 @@ def test_design_job_cancels_and_closing_the_page_stops_jobs(browser, server):
     pg.goto(server["url"] + "/")
     _wait_state(pg, lambda s: bool(s))
     pg.get_by_role("tab", name="Design for target").click()
-    pg.get_by_label("target").fill("1:1,2:2,3:3")
+    # a share tuned by simulation: seconds of work, so the job is still running when it is cancelled
+    _choose(pg, ".studio-design-model", "simulation")
+    pg.get_by_label("target").fill("1:1,2:3,3:1.4")
     pg.locator(".studio-design").click()
     _wait_text(pg, ".studio-design-text", r"budget", 60)
     assert _children(server["proc"].pid)

@@ -137,7 +137,8 @@ class DesignPanel(JobPanel):
     def build(self, target: str | None) -> None:
         with ui.row().classes("items-end gap-4"):
             self.target = ui.input("target", value=target or "2d6").classes("w-56")
-            self.model = ui.select(["fast", "solid-angle", "simulation"], value="fast", label="model").classes("w-40")
+            self.model = ui.select(["fast", "solid-angle", "simulation"], value="fast",
+                                   label="model").classes("w-40 studio-design-model")  # fmt: skip
             self.budget = ui.number("budget, s", value=60, min=5, max=3600, step=5, precision=0)
             self.seed = ui.number("seed", value=0, min=0, step=1, precision=0)
             ui.button("Design for target", on_click=self.start_design).classes("studio-design")
