@@ -240,12 +240,13 @@ def run(spec, log, run_name, history, budget, max_evals, workers, client, as_jso
     live, update = _simulation_view(spec, budget * 60, history)
     records = list(history)
     names = ", ".join(d.name for d in dice)
+    rolls = sum(d.n for d in dice)
     domain = {"fills": sorted({d.design.fill.kind for d in dice})}
 
     def summary(best):
         return {
             "deviance": best["deviance"],
-            "deviance_per_roll": best["deviance"] / sum(d.n for d in dice),
+            "deviance_per_roll": best["deviance"] / rolls,
             "drops_per_die": best["drops"],
             "seed": spec.seed,
             "dice": [d.name for d in dice],
@@ -306,7 +307,7 @@ def run(spec, log, run_name, history, budget, max_evals, workers, client, as_jso
         "name": run_name,
         "fitted": fitted,
         "deviance": best["deviance"],
-        "deviance_per_roll": best["deviance"] / sum(d.n for d in dice),
+        "deviance_per_roll": best["deviance"] / rolls,
         "prior_sd": spec.prior_sd,
         "prior": best.get("prior"),
         "drops_per_die": best["drops"],

@@ -217,9 +217,9 @@ class CalibrationSpec:
 
     def prior(self, x: Sequence[float]) -> float:
         """Minus twice the log prior at unit-cube point `x`, up to a constant (0 without a prior)."""
-        if self.prior_sd is None:
-            return 0.0
-        return float((((np.asarray(x, dtype=float) - np.asarray(self.x0)) / self.prior_sd) ** 2).sum())
+        from diefab.search.crossval import prior_cost
+
+        return float(prior_cost(x, self.x0, math.inf if self.prior_sd is None else self.prior_sd))
 
     def to_json(self) -> str:
         data = asdict(self)
@@ -406,15 +406,15 @@ def held_out(records: Sequence[Mapping[str, Any]], dice: Sequence[RealDie], *, x
         ``drops``), with that candidate's ``params``; None with fewer than
         two dice or no feasible evaluation.
     """
-    from diefab.search.crossval import pick_candidate
+    from diefab.search.crossval import deviance_table, pick_candidate
 
     feasible = [r for r in records if r.get("feasible")]
     if len(dice) < 2 or not feasible:
         return None
     drops = min(r["drops"] for r in feasible)
     candidates = [r for r in feasible if r["drops"] == drops]
-    dev = np.array([[deviance(die.counts, die.symmetrized(smoothed(np.asarray(r["dice"][k]["counts"]))))
-                     for r in candidates] for k, die in enumerate(dice)])  # fmt: skip
+    dev = deviance_table(dice, [[smoothed(np.asarray(r["dice"][k]["counts"])) for r in candidates]
+                                for k in range(len(dice))])  # fmt: skip
     coords = np.array([r["x"] for r in candidates], dtype=float)
     start = np.zeros(coords.shape[1]) if x0 is None else np.asarray(x0, dtype=float)
     sd = math.inf if prior_sd is None else prior_sd

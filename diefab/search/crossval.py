@@ -45,7 +45,15 @@ import numpy as np
 
 from diefab.core.errors import StatsError
 
-__all__ = ["RULES", "deviance_table", "held_out_choices", "nested_choices", "pick_candidate", "training_rows"]
+__all__ = [
+    "RULES",
+    "deviance_table",
+    "held_out_choices",
+    "nested_choices",
+    "pick_candidate",
+    "prior_cost",
+    "training_rows",
+]
 
 #: The held-out rules of :func:`held_out_choices`, in print order.
 RULES = ("loo", "lofo", "loo-surface", "lofo-surface")
@@ -64,6 +72,17 @@ def deviance_table(dice, probabilities: Sequence[Sequence[np.ndarray]]) -> np.nd
     from diefab.search.likelihood import deviance
 
     return np.array([[deviance(d.counts, d.symmetrized(p)) for p in row] for d, row in zip(dice, probabilities)])
+
+
+def prior_cost(coords: np.ndarray, x0: np.ndarray, prior_sd: float) -> np.ndarray:
+    """Minus twice the log of the normal prior toward `x0` (sd `prior_sd`) at each row of `coords`, up to a constant.
+
+    `coords` is (candidates, d) or one point (d,); an infinite `prior_sd` is no prior (0 everywhere).
+    """
+    coords = np.asarray(coords, dtype=float)
+    if not math.isfinite(prior_sd):
+        return np.zeros(coords.shape[:-1])
+    return (((coords - np.asarray(x0, dtype=float)) / prior_sd) ** 2).sum(axis=-1)
 
 
 def pick_candidate(dev: np.ndarray, train: Sequence[int], coords: np.ndarray, x0: np.ndarray,
@@ -89,9 +108,7 @@ def pick_candidate(dev: np.ndarray, train: Sequence[int], coords: np.ndarray, x0
     if not prior_sd > 0:
         raise StatsError(f"prior_sd={prior_sd!r} must be > 0 (inf: no prior)")
     total = dev[list(train)].sum(axis=0) if len(train) else np.zeros(len(coords))
-    if math.isfinite(prior_sd):
-        total = total + (((coords - np.asarray(x0, dtype=float)) / prior_sd) ** 2).sum(axis=1)
-    return int(np.argmin(total))
+    return int(np.argmin(total + prior_cost(coords, x0, prior_sd)))
 
 
 def training_rows(names: Sequence[str], i: int, rule: str, family: Callable[[str], str],
