@@ -14,6 +14,7 @@ from diefab.dice.targets import parse_target
 from diefab.stats import confidence_sequence
 from diefab.stats import sequential as seq
 from diefab.stats.goodness import tvd
+from diefab.stats.projection import denoised_tvd
 from diefab.stats.sequential import (
     SequentialTest,
     ball_max_loglik,
@@ -25,6 +26,7 @@ from diefab.stats.sequential import (
     tvd_bounds,
     within_reached,
 )
+from diefab.stats.verdict import sequential_line
 
 FOUR_DF = parse_target("4df").probabilities
 TABLE2 = [0, 20, 48, 80, 89, 83, 66, 17, 2]
@@ -127,6 +129,29 @@ def test_table_two_is_undecided_with_an_honest_interval():
     res = sequential_counts(TABLE2, FOUR_DF, delta=0.03)
     assert res.decision == "undecided" and res.decided_at is None
     assert res.tvd_low == 0.0 and 0.047 < res.tvd_high < 0.5 and res.more_rolls > 1_000
+
+
+def test_a_die_on_the_tolerance_is_said_to_be_there_and_one_far_from_it_is_not():
+    # Table 2 without its noise sits about 0.03 from 4dF, so at delta 0.03 the
+    # estimate is huge and the line says why; at delta 0.1 it is not and does not
+    on = sequential_counts(TABLE2, FOUR_DF, delta=0.03)
+    assert abs(on.tvd_denoised - 0.03) < 0.005 and on.tvd_denoised < on.tvd
+    assert on.more_rolls is None or on.more_rolls > 100 * on.n
+    assert "on the tolerance 0.03" in sequential_line(on, "4dF")
+    off = sequential_counts(TABLE2, FOUR_DF, delta=0.1)
+    assert off.tvd_denoised == on.tvd_denoised and off.more_rolls < 10 * off.n
+    assert "tolerance" not in sequential_line(off, "4dF")
+
+
+def test_denoised_tvd_removes_exactly_the_expected_noise():
+    t = np.array([0.25, 0.25, 0.5])
+    assert denoised_tvd(np.array([25.0, 25.0, 50.0]), t) == 0.0
+    # all of the spread is noise: n times the Pearson divergence below k - 1
+    assert denoised_tvd(np.array([27.0, 24.0, 49.0]), t) == 0.0
+    c = np.array([50.0, 10.0, 40.0])
+    d = float((((c / 100 - t) ** 2) / t).sum())
+    scale = np.sqrt((d - 2 / 100) / d)
+    assert np.isclose(denoised_tvd(c, t), scale * 0.5 * np.abs(c / 100 - t).sum())
 
 
 def test_incremental_and_batch_agree_and_undo_restores():

@@ -15,7 +15,7 @@ from diefab.core.errors import StatsError
 from diefab.stats.confidence_sequence import off_reached, within_reached
 from diefab.stats.goodness import check_counts, check_probabilities, expected_tvd_exact, tvd
 
-__all__ = ["HORIZON", "check_test", "rolls_needed", "rolls_to_decision"]
+__all__ = ["HORIZON", "check_test", "denoised_tvd", "rolls_needed", "rolls_to_decision"]
 
 #: Most rolls the estimate of rolls still needed looks ahead to.
 HORIZON = 10**8
@@ -75,6 +75,22 @@ def _debiased(c: np.ndarray, t: np.ndarray) -> np.ndarray:
     excess = d - (live.sum() - 1) / n
     scale = np.sqrt(excess / d) if excess > 0 else 0.0
     return t + scale * (phat - t)
+
+
+def denoised_tvd(counts: np.ndarray, target: np.ndarray) -> float:
+    """TVD to the target of the frequencies with their expected noise taken out: the die the estimate assumes.
+
+    Examples
+    --------
+    Counts exactly at the target's proportions, and counts whose spread is all noise:
+
+    >>> denoised_tvd(np.array([50.0, 50.0]), np.array([0.5, 0.5]))
+    0.0
+    >>> denoised_tvd(np.array([52.0, 48.0]), np.array([0.5, 0.5]))
+    0.0
+    """
+    c = np.asarray(counts, float)
+    return float(tvd(_debiased(c, target), target))
 
 
 def rolls_needed(counts: Sequence[int], target, delta: float, alpha: float = 0.05) -> int | None:

@@ -43,7 +43,7 @@ from diefab.stats.confidence_sequence import (
     within_reached,
 )
 from diefab.stats.goodness import check_counts, tvd
-from diefab.stats.projection import HORIZON, rolls_needed, rolls_to_decision
+from diefab.stats.projection import HORIZON, denoised_tvd, rolls_needed, rolls_to_decision
 from diefab.stats.projection import check_test as _check
 
 __all__ = [
@@ -89,6 +89,10 @@ class SequentialResult:
     more_rolls : int or None
         Estimated further rolls to a decision if the die rolls as observed so
         far (0 once decided; None beyond :data:`HORIZON`).
+    tvd_denoised : float
+        TVD to the target once the noise of n rolls is taken out of the
+        frequencies: the die the estimate of `more_rolls` assumes.  Near
+        `delta` that estimate grows without bound.
     """
 
     n: int
@@ -100,6 +104,7 @@ class SequentialResult:
     tvd_low: float
     tvd_high: float
     more_rolls: int | None
+    tvd_denoised: float
 
     def as_dict(self) -> dict:
         return {f: getattr(self, f) for f in self.__dataclass_fields__}
@@ -220,7 +225,8 @@ class SequentialTest:
         if at is None and estimate:
             total = rolls_to_decision(c, self.target, self.delta, self.alpha)
             more = None if total is None else max(total - n, 1)
-        return SequentialResult(n, self.delta, self.alpha, decision, at, observed, low, high, more)
+        denoised = denoised_tvd(c, self.target) if n else float("nan")
+        return SequentialResult(n, self.delta, self.alpha, decision, at, observed, low, high, more, denoised)
 
 
 def _first_decision(prefix: np.ndarray, t, delta, alpha, start: int) -> tuple[str, int] | None:

@@ -118,6 +118,19 @@ def _about(n: int) -> str:
     return f"{round(int(n), -digits):,}"
 
 
+def _still_needed(seq: SequentialResult, label: str, needed: str) -> str:
+    """The rolls still `needed`, and why when the die looks to sit on the tolerance."""
+    more = "many more rolls" if seq.more_rolls is None else f"about {_about(seq.more_rolls)} more rolls"
+    more += f" {needed}"
+    huge = seq.more_rolls is None or seq.more_rolls > 100 * max(seq.n, 100)
+    if huge and abs(seq.tvd_denoised - seq.delta) < 0.5 * seq.delta:
+        more += (
+            f" (without the noise of {seq.n:,} rolls the die looks TVD {seq.tvd_denoised:.3f} from {label},"
+            f" on the tolerance {seq.delta:g}: a looser tolerance decides far sooner)"
+        )
+    return more
+
+
 def _p(p: float) -> str:
     return "p < 0.001" if p < 0.001 else f"p = {p:.2g}"
 
@@ -162,7 +175,7 @@ def verdict(
         notice = "no player will notice in a lifetime of rolls"
     else:
         notice = f"a player would notice after about {_about(noticed)} rolls"
-    more = "many more rolls needed" if s.more_rolls is None else f"about {_about(s.more_rolls)} more rolls needed"
+    more = _still_needed(s, label, "needed")
     seen = f"at {n:,} rolls ({_p(p_value)})"
     if s.decision == "within":
         text = f"rolls like {label} within TVD {s.delta:g} ({ci}): " + (
@@ -204,5 +217,4 @@ def sequential_line(seq: SequentialResult, label: str) -> str:
         return f"{head}: rolls like {label} within TVD {seq.delta:g}{at}"
     if seq.decision == "off":
         return f"{head}: off {label} by at least TVD {seq.delta:g}{at}"
-    more = "many more rolls" if seq.more_rolls is None else f"about {_about(seq.more_rolls)} more rolls"
-    return f"{head}: not yet within or off by TVD {seq.delta:g}; {more} likely needed"
+    return f"{head}: not yet within or off by TVD {seq.delta:g}; {_still_needed(seq, label, 'likely needed')}"
