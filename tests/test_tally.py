@@ -220,3 +220,12 @@ def test_calibrate_reads_a_roll_log(tmp_path):
         append_roll(path, Roll.now(v))
     die = real_die(design.name, design, str(path))
     assert die.n == 5 and die.counts.tolist() == [1, 0, 0, 1, 2, 0, 1, 0, 0]
+
+
+def test_stats_json_is_strict_json_before_any_roll(run):
+    def refuse(constant):
+        raise ValueError(f"{constant} is not JSON")
+
+    code, out, _ = run("stats", "--counts", "0,0,0", "--target", "1:1,2:1,3:1", "--sequential", "--json")
+    data = json.loads(out, parse_constant=refuse)
+    assert code == 0 and data["n"] == 0 and data["tvd"] is None and data["tvd_high"] == pytest.approx(2 / 3)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -38,15 +39,26 @@ def console(stderr: bool = False):
 
 
 def emit_json(obj: Any) -> None:
-    """Print one JSON object on stdout."""
-    click.echo(json.dumps(obj, indent=2, default=_json_default, ensure_ascii=False))
+    """Print one JSON object on stdout, as strict JSON: a value that is not a finite number is null."""
+    click.echo(json.dumps(_strict(obj), indent=2, default=_json_default, ensure_ascii=False, allow_nan=False))
+
+
+def _strict(obj: Any) -> Any:
+    """`obj` with NaN and infinities, in containers and arrays too, replaced by None."""
+    if isinstance(obj, dict):
+        return {k: _strict(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_strict(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _strict(obj.tolist())
+    if isinstance(obj, (float, np.floating)):
+        return float(obj) if math.isfinite(obj) else None
+    if isinstance(obj, np.generic):
+        return obj.item()
+    return obj
 
 
 def _json_default(obj: Any):
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, np.generic):
-        return obj.item()
     if isinstance(obj, Path):
         return str(obj)
     raise TypeError(f"cannot serialize {type(obj).__name__}")
