@@ -39,6 +39,7 @@ BENCHMARKS = [
     ("bench_realrolls.py", ["--guard", "--sims", "400"], ["--guard", "--sims", "400"]),  # cached: the guard's figures
     ("bench_heldout.py", [], []),  # cached: prints in half a minute
     ("bench_throw.py", [], []),  # cached: prints in seconds
+    ("fit_center_of_mass.py", [], ["--dice", "binom3,kitten_d3", "--evals", "40"]),
     ("bench_basins.py", [], []),
     ("bench_many_faces.py", [], ["--sims", "40"]),
     ("bench_fair_shapes.py", [], ["--faces", "22", "--sims", "600"]),
