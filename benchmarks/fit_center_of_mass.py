@@ -58,8 +58,8 @@ def fit(die, evals: int) -> dict:
     res = minimize(cost, np.zeros(3), method="Nelder-Mead",
                    options={"initial_simplex": simplex, "maxfev": evals, "xatol": 1e-3, "fatol": 0.1})  # fmt: skip
     before, after = probabilities(np.zeros(3)), probabilities(res.x)
-    return {"shift": res.x, "deviance": (cost(np.zeros(3)), float(res.fun)), "tvd": (value_tvd(die, before), value_tvd(die, after)),
-            "evals": int(res.nfev)}  # fmt: skip
+    return {"shift": res.x, "deviance": (cost(np.zeros(3)), float(res.fun)),
+            "tvd": (value_tvd(die, before), value_tvd(die, after)), "evals": int(res.nfev)}  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> None:
