@@ -27,6 +27,7 @@ from scipy.optimize import minimize
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from diefab.core.errors import GeometryError  # noqa: E402
 from diefab.models.probabilities import value_probabilities  # noqa: E402
 from diefab.search.fidelity import load_real_dice, noise_tvd, value_tvd  # noqa: E402
 
@@ -51,7 +52,7 @@ def fit(die, evals: int) -> dict:
     def cost(shift: np.ndarray) -> float:
         try:
             return deviance(die.counts.astype(float), probabilities(shift))
-        except Exception:  # the centre left the die: no resting face
+        except GeometryError:  # the centre left the die
             return np.inf
 
     simplex = np.vstack([np.zeros(3), 0.02 * np.eye(3)])
