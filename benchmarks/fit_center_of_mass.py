@@ -6,7 +6,8 @@ A diagnostic, in-sample by construction: for each die with real rolls (the
 shared data and the published printed dice), the centre of mass is moved to
 minimise the deviance of the die's real counts under the ``basins`` model
 (the quasi-static limit, no throw), by Nelder-Mead from the printed body's
-own centre.  It prints the shift as a fraction of the hull's longest side,
+own centre; a centre that would let the die rest on a face with no value
+(one no real roll showed) is refused.  It prints the shift as a fraction of the hull's longest side,
 the deviance and the TVD before and
 after.  A die that needs a shift of a few per cent is one a print's fill or
 supports could explain; one that needs far more, or still misses, is not a
@@ -27,7 +28,7 @@ from scipy.optimize import minimize
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from diefab.core.errors import GeometryError  # noqa: E402
+from diefab.core.errors import DesignError, GeometryError  # noqa: E402
 from diefab.models.probabilities import value_probabilities  # noqa: E402
 from diefab.search.fidelity import load_real_dice, noise_tvd, value_tvd  # noqa: E402
 
@@ -52,7 +53,7 @@ def fit(die, evals: int) -> dict:
     def cost(shift: np.ndarray) -> float:
         try:
             return deviance(die.counts.astype(float), probabilities(shift))
-        except GeometryError:  # the centre left the die
+        except (DesignError, GeometryError):  # the centre left the die, or rests it on a face with no value
             return np.inf
 
     simplex = np.vstack([np.zeros(3), 0.02 * np.eye(3)])
