@@ -143,6 +143,14 @@ def test_a_die_on_the_tolerance_is_said_to_be_there_and_one_far_from_it_is_not()
     assert "tolerance" not in sequential_line(off, "4dF")
 
 
+def test_counts_of_any_size_are_tested_without_listing_their_rolls():
+    res = sequential_counts([10**14, 1], [0.5, 0.5], delta=0.03)
+    assert res.n == 10**14 + 1 and res.decision == "off" and res.tvd_low > 0.49
+    test = SequentialTest([0.5, 0.5], 0.03)
+    test.push(0)
+    assert test.n == 1 and sequential_counts([10**14, 10**14], [0.5, 0.5]).tvd_high < 1e-6
+
+
 def test_denoised_tvd_removes_exactly_the_expected_noise():
     t = np.array([0.25, 0.25, 0.5])
     assert denoised_tvd(np.array([25.0, 25.0, 50.0]), t) == 0.0

@@ -150,7 +150,7 @@ class SequentialTest:
 
     @property
     def n(self) -> int:
-        return len(self._rolls)
+        return int(self._counts.sum())
 
     @property
     def counts(self) -> np.ndarray:
@@ -194,6 +194,8 @@ class SequentialTest:
 
     def pop(self) -> None:
         """Undo the last roll."""
+        if not self._ordered:
+            raise StatsError("counts without order: no roll to undo")
         if not self._rolls:
             raise StatsError("no roll to undo")
         self._counts[self._rolls.pop()] -= 1
@@ -202,6 +204,8 @@ class SequentialTest:
         self._bounds = {m: b for m, b in self._bounds.items() if m <= self.n}
 
     def _counts_at(self, m: int) -> np.ndarray:
+        if m == self.n:
+            return self._counts.copy()
         return np.bincount(np.asarray(self._rolls[:m], dtype=np.int64), minlength=len(self.target))
 
     def result(self, *, estimate: bool = True) -> SequentialResult:
@@ -309,8 +313,7 @@ def sequential_counts(
     if len(c) != len(t):
         raise StatsError(f"{len(c)} counts for the {len(t)} values of the target")
     test = SequentialTest(t, delta, alpha)
-    test._rolls = np.repeat(np.arange(len(t)), c).tolist()
-    test._counts = c.copy()
-    test._check_now()
+    test._counts = np.asarray(c, dtype=np.int64).copy()  # no roll list: counts can be far too many to list
     test._ordered = False
+    test._check_now()
     return test.result(estimate=estimate)
