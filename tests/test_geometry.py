@@ -149,6 +149,28 @@ def test_points_not_in_convex_position_are_rejected():
         Polyhedron.from_points([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [2, 2, 0]])
 
 
+@pytest.mark.parametrize("off", [1e-12, 1e-9, 1e-8, 1e-6, 1e-4])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_points_a_hair_off_a_face_give_the_hull_they_span(off, seed):
+    """Near-coplanar hull triangles (a corner lifted, a point just above a face) make a valid hull of the same volume.
+
+    Triangles coplanar only within tolerance are merged only where they make
+    one flat convex polygon; otherwise they stay triangles, so the result is
+    always a closed convex solid whose volume is the hull's.
+    """
+    from scipy.spatial import ConvexHull
+
+    rng = np.random.default_rng(seed)
+    cube = np.array(list(itertools.product([-1.0, 1.0], repeat=3)))
+    lifted = cube.copy()
+    lifted[rng.integers(8), 2] += off * np.sign(lifted[0, 2])  # one corner off its faces' planes
+    bump = np.array([[*rng.uniform(-0.9, 0.9, 2), 1 + off]])  # a point just above the top face
+    for points in (lifted, np.vstack([cube, bump]), np.vstack([lifted, bump]) + rng.normal(0, off, (9, 3))):
+        poly = Polyhedron.from_points(points, strict=False)
+        assert poly.volume == pytest.approx(ConvexHull(points).volume, abs=1e-8)  # faces flat within 1e-9
+        assert np.all(poly.vertices @ poly.normals.T - poly.offsets <= 1e-9)
+
+
 def test_from_mesh_merges_coplanar_triangles(tmp_path):
     import trimesh
 

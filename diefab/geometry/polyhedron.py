@@ -125,8 +125,10 @@ class Polyhedron:
             plane is the supporting plane with the group's mean normal.  The
             result is the intersection of those supporting half-spaces, so
             it contains every point and no vertex moves by much more than
-            the tolerance.  By default only exactly coplanar triangles are
-            merged and the vertices are the points themselves.
+            the tolerance.  By default the vertices are the points
+            themselves, and neighbouring hull triangles are merged only where
+            they make one convex polygon flat to rounding; triangles a hair
+            off each other's planes stay triangles.
         """
         from scipy.spatial import ConvexHull, QhullError
 
@@ -152,7 +154,7 @@ class Polyhedron:
                     "the points are not in convex position"
                 )
             return cls.from_points(_merged_hull(pts, hull, merge_tolerance), strict=False)
-        faces = _merge_coplanar(pts, hull.simplices, hull.equations)
+        faces = _merge_coplanar(pts, hull)
         if len(faces) > MAX_FACES:
             raise GeometryError(f"the convex hull has {len(faces):,} faces, more than the {MAX_FACES:,} diefab "
                                 "models: simplify the mesh or give it a larger merge tolerance")  # fmt: skip
@@ -382,37 +384,92 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
-def _merge_coplanar(points: np.ndarray, simplices: np.ndarray, equations: np.ndarray) -> list[np.ndarray]:
-    """Group hull triangles by plane and return each group's boundary polygon, outward CCW."""
-    normals = equations[:, :3]
+def _merge_coplanar(points: np.ndarray, hull) -> list[np.ndarray]:
+    """Merge coplanar hull triangles into faces, each an outward CCW ring of vertex indices.
+
+    A face grows from its lowest-numbered triangle over shared edges to
+    triangles in its plane.  A group whose union is not a convex polygon
+    (triangles that are coplanar only within tolerance: a vertex a hair off
+    the plane, inside the group or on a slight fold) stays as its triangles.
+    """
+    simplices, equations = hull.simplices, hull.equations
+    group = np.full(len(simplices), -1)
     groups: list[list[int]] = []
-    refs = np.empty_like(equations)  # each group's first triangle's plane, compared with all at once
-    for t in range(len(simplices)):
-        r = refs[: len(groups)]
-        same = (1 - r[:, :3] @ normals[t] < tol.COPLANAR) & (
-            np.abs(equations[t, 3] - r[:, 3]) < tol.COPLANAR * (1 + np.abs(r[:, 3]))
-        )
-        hit = np.flatnonzero(same)
-        if hit.size:
-            groups[hit[0]].append(t)
-        else:
-            refs[len(groups)] = equations[t]
-            groups.append([t])
+    for seed in range(len(simplices)):
+        if group[seed] >= 0:
+            continue
+        ref = equations[seed]
+        group[seed], members, stack = len(groups), [seed], [seed]
+        while stack:
+            for u in hull.neighbors[stack.pop()]:
+                if (
+                    group[u] < 0
+                    and 1 - ref[:3] @ equations[u, :3] < tol.COPLANAR
+                    and abs(equations[u, 3] - ref[3]) < tol.COPLANAR * (1 + abs(ref[3]))
+                ):
+                    group[u] = len(groups)
+                    members.append(u)
+                    stack.append(u)
+        groups.append(sorted(members))
+    flat = 0.5 * tol.PLANARITY * max(1.0, float(np.ptp(points, axis=0).max()))
     faces = []
     for g in groups:
-        n = normals[g].mean(axis=0)
-        n /= np.linalg.norm(n)
-        idx = np.unique(simplices[g])
-        p = points[idx]
-        centre = p.mean(axis=0)
-        u = p[0] - centre
-        u -= (u @ n) * n
-        u /= np.linalg.norm(u)
-        w = np.cross(n, u)
-        ang = np.arctan2((p - centre) @ w, (p - centre) @ u)
-        ring = idx[np.argsort(ang)]
-        faces.append(_drop_collinear(points, ring))
+        n = equations[g, :3].mean(axis=0)
+        ring = _ring(points, simplices[g], n / np.linalg.norm(n), flat)
+        if ring is None:
+            faces.extend(_ring(points, simplices[[t]], equations[t, :3]) for t in g)  # a triangle is always flat
+        else:
+            faces.append(_drop_collinear(points, ring))
     return faces
+
+
+def _ring(points: np.ndarray, triangles: np.ndarray, n: np.ndarray, flat: float = np.inf) -> np.ndarray | None:
+    """The outline of coplanar `triangles` as a ring CCW about `n`, or None if it is not a convex polygon
+    whose vertices lie within `flat` of one plane."""
+    idx = np.unique(triangles)
+    p = points[idx]
+    centre = p.mean(axis=0)
+    if len(triangles) > 1 and np.abs((p - centre) @ n).max() > flat:
+        return None
+    u = p[0] - centre
+    u -= (u @ n) * n
+    u /= np.linalg.norm(u)
+    w = np.cross(n, u)
+    ring = idx[np.argsort(np.arctan2((p - centre) @ w, (p - centre) @ u))]
+    if len(triangles) == 1:
+        return ring
+    outline = _outline(triangles)
+    if outline is None:
+        return None
+    if len(outline) == len(ring):
+        start = int(np.flatnonzero(outline == ring[0])[0])
+        turned = np.roll(outline, -start)
+        if np.array_equal(turned, ring) or np.array_equal(np.roll(turned[::-1], 1), ring):
+            return ring  # the usual case: every vertex on the outline, in angle order
+    if np.cross(*(points[outline[1:3]] - points[outline[0]])) @ n < 0:
+        outline = outline[::-1]
+    a, b, c = points[np.roll(outline, 1)], points[outline], points[np.roll(outline, -1)]
+    turns = _cross(b - a, c - b) @ n
+    scale = np.linalg.norm(b - a, axis=1) * np.linalg.norm(c - b, axis=1)
+    return outline if np.all(turns > -tol.COLLINEAR * scale) else None
+
+
+def _outline(triangles: np.ndarray) -> np.ndarray | None:
+    """The boundary of a disc of triangles as one cycle of vertices, or None if it is not one cycle."""
+    edges = np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]]), axis=1)
+    unique, count = np.unique(edges, axis=0, return_counts=True)
+    nexts: dict[int, list[int]] = {}
+    for a, b in unique[count == 1].tolist():
+        nexts.setdefault(a, []).append(b)
+        nexts.setdefault(b, []).append(a)
+    if not nexts or any(len(v) != 2 for v in nexts.values()):
+        return None
+    first = next(iter(nexts))
+    ring = [first, nexts[first][0]]
+    while ring[-1] != first:
+        a, b = nexts[ring[-1]]
+        ring.append(b if a == ring[-2] else a)
+    return np.array(ring[:-1]) if len(ring) - 1 == len(nexts) else None
 
 
 def _merged_hull(points: np.ndarray, hull, tolerance: float) -> np.ndarray:
