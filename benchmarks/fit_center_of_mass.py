@@ -59,8 +59,9 @@ def fit(die, evals: int) -> dict:
     simplex = np.vstack([np.zeros(3), 0.02 * np.eye(3)])
     res = minimize(cost, np.zeros(3), method="Nelder-Mead",
                    options={"initial_simplex": simplex, "maxfev": evals, "xatol": 1e-3, "fatol": 0.1})  # fmt: skip
-    before, after = probabilities(np.zeros(3)), probabilities(res.x)
-    return {"shift": res.x, "deviance": (cost(np.zeros(3)), float(res.fun)),
+    counts = die.counts.astype(float)
+    before, after = probabilities(np.zeros(3)), probabilities(res.x)  # the start and the fit, once each
+    return {"shift": res.x, "deviance": (deviance(counts, before), deviance(counts, after)),
             "tvd": (value_tvd(die, before), value_tvd(die, after)), "evals": int(res.nfev)}  # fmt: skip
 
 

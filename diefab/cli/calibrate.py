@@ -172,7 +172,7 @@ def calibrate(ctx, die_args, realrolls, name, free, bounds, seed, sims_per_eval,
         stored = {"seed": seed, "sims_per_eval": sims_per_eval, "method": method, "grid_points": grid_points,
                   "sigma0": sigma, "max_sims": max_sims_per_eval, "prior_sd": prior_sd}  # fmt: skip
         for key, value in stored.items():
-            option = {"sigma0": "sigma", "max_sims": "max_sims_per_eval", "prior_sd": "prior_sd"}.get(key, key)
+            option = {"sigma0": "sigma", "max_sims": "max_sims_per_eval"}.get(key, key)
             source = ctx.get_parameter_source(option)
             if source is not None and source.name == "COMMANDLINE" and value != getattr(spec, key):
                 flag = "--prior" if option == "prior_sd" else f"--{option.replace('_', '-')}"
