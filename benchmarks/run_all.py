@@ -40,6 +40,8 @@ BENCHMARKS = [
     ("bench_heldout.py", [], []),  # cached: prints in half a minute
     ("bench_throw.py", [], []),  # cached: prints in seconds
     ("fit_center_of_mass.py", [], ["--dice", "binom3,kitten_d3", "--evals", "40"]),
+    ("fit_chain.py", [], ["--evals", "20"]),
+    ("fit_cuboid_curves.py", [], []),
     ("bench_basins.py", [], []),
     ("bench_many_faces.py", [], ["--sims", "40"]),
     ("bench_fair_shapes.py", [], ["--faces", "22", "--sims", "600"]),
