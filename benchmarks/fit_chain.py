@@ -29,7 +29,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-from scipy.optimize import minimize
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -39,15 +38,9 @@ from diefab.models.probabilities import to_values  # noqa: E402
 from diefab.search.fidelity import load_real_dice, noise_tvd, value_tvd  # noqa: E402
 from diefab.search.published import printed_dice, square_cuboid_dice  # noqa: E402
 
-NAMES = ("temperature", "tau", "area_power", "height_weight", "roll_power")
-#: The shipped constants, in the fitted coordinates (log temperature, log tau, the three others).
-START = np.array([np.log(chain.TEMPERATURE), np.log(chain.TAU),
-                  chain.AREA_POWER, chain.HEIGHT_WEIGHT, chain.ROLL_POWER])  # fmt: skip
-
-
-def constants(x: np.ndarray) -> dict[str, float]:
-    """The chain's keyword constants at the fitted coordinates `x`."""
-    return dict(zip(NAMES, (float(np.exp(x[0])), float(np.exp(x[1])), *map(float, x[2:]))))
+#: The shipped constants, fitted to pybullet.
+SHIPPED = {"temperature": chain.TEMPERATURE, "tau": chain.TAU, "area_power": chain.AREA_POWER,
+           "height_weight": chain.HEIGHT_WEIGHT, "roll_power": chain.ROLL_POWER}  # fmt: skip
 
 
 class Scorer:
@@ -58,25 +51,21 @@ class Scorer:
         self.bodies = [(d.design.polyhedron, d.design.mass_properties().center) for d in dice]
         self.noise = np.array([noise_tvd(d) for d in dice])
 
-    def tvd(self, x: np.ndarray, rows) -> np.ndarray:
-        """(len(rows),) TVD of each die of `rows` (1 where the chain has no answer at `x`)."""
-        kw, out = constants(x), []
+    def tvd(self, constants: dict[str, float], rows) -> np.ndarray:
+        """(len(rows),) TVD of each die of `rows` (1 where the chain has no answer at `constants`)."""
+        out = []
         for i in rows:
             poly, center = self.bodies[i]
-            p = chain.landing_probabilities(poly, center, **kw)
+            p = chain.landing_probabilities(poly, center, **constants)
             out.append(value_tvd(self.dice[i], to_values(self.dice[i].design, p)) if np.isfinite(p).all() else 1.0)
         return np.array(out)
 
-    def fit(self, rows, evals: int) -> np.ndarray:
+    def fit(self, rows, evals: int) -> dict[str, float]:
         """The constants of least mean TVD / noise over the dice `rows`, from the shipped ones."""
         rows = list(rows)
-
-        def loss(x: np.ndarray) -> float:
-            return float(np.mean(self.tvd(x, rows) / self.noise[rows]))
-
-        simplex = np.vstack([START, START + 0.3 * np.eye(len(START))])
-        options = {"maxfev": evals, "adaptive": True, "initial_simplex": simplex, "xatol": 1e-3, "fatol": 1e-5}
-        return minimize(loss, START, method="Nelder-Mead", options=options).x
+        fitted, _ = chain.fit_constants(lambda kw: float(np.mean(self.tvd(kw, rows) / self.noise[rows])),
+                                        maxfev=evals, fatol=1e-5)  # fmt: skip
+        return fitted
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -99,13 +88,13 @@ def main(argv: list[str] | None = None) -> int:
 
     print(f"chain constants fitted to real dice: mean TVD (and over the mean noise) per set, {args.evals} evaluations")
     print(f"{'constants':<34}" + "".join(f"{name:>20}" for name in sets))
-    shipped = s.tvd(START, everyone)
+    shipped = s.tvd(SHIPPED, everyone)
     print(f"{'shipped (fitted to pybullet)':<34}" + "".join(f"{r:>20}" for r in ratios(shipped)))
     fits = {"every die": everyone} | {name: rows for name, rows in members.items()}
     for label, rows in fits.items():
         x = s.fit(rows, args.evals)
         print(f"{'fitted on ' + label:<34}" + "".join(f"{r:>20}" for r in ratios(s.tvd(x, everyone))), flush=True)
-        print("    " + ", ".join(f"{k} {v:.3g}" for k, v in constants(x).items()))
+        print("    " + ", ".join(f"{k} {v:.3g}" for k, v in x.items()))
     held = np.zeros(len(dice))
     for rows in members.values():
         held[rows] = s.tvd(s.fit(np.setdiff1d(everyone, rows), args.evals), rows)

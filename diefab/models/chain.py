@@ -56,7 +56,7 @@ True
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -70,6 +70,7 @@ __all__ = [
     "TAU",
     "TEMPERATURE",
     "calibrate",
+    "fit_constants",
     "landing_probabilities",
     "roll_retention",
     "tipping_barriers",
@@ -270,6 +271,44 @@ def _evolve(p0: np.ndarray, generator: np.ndarray) -> np.ndarray:
     return out
 
 
+def fit_constants(
+    loss: Callable[[dict[str, float]], float],
+    x0=(TEMPERATURE, TAU, AREA_POWER, HEIGHT_WEIGHT, ROLL_POWER),
+    *,
+    maxfev: int = 3000,
+    fatol: float = 1e-6,
+) -> tuple[dict[str, float], float]:
+    """The model's five constants of least `loss`, and that loss.
+
+    Nelder--Mead (adaptive) on (log T, log tau, area power, height weight,
+    roll power), from `x0` with a simplex of 0.3 along each coordinate.
+
+    Parameters
+    ----------
+    loss : callable
+        Maps the constants, as :func:`landing_probabilities`'s keywords
+        (``temperature``, ``tau``, ``area_power``, ``height_weight``,
+        ``roll_power``), to the number to minimise.
+    x0 : (5,) float
+        Start: temperature, tau, area_power, height_weight, roll_power.
+    maxfev : int
+        Most evaluations of `loss`.
+    fatol : float
+        Change in `loss` below which the simplex has converged.
+    """
+    from scipy.optimize import minimize
+
+    def constants(x: np.ndarray) -> dict[str, float]:
+        return {"temperature": float(np.exp(x[0])), "tau": float(np.exp(x[1])), "area_power": float(x[2]),
+                "height_weight": float(x[3]), "roll_power": float(x[4])}  # fmt: skip
+
+    start = np.array([np.log(x0[0]), np.log(x0[1]), x0[2], x0[3], x0[4]])
+    simplex = np.vstack([start, start + 0.3 * np.eye(len(start))])
+    options = {"xatol": 1e-3, "fatol": fatol, "maxfev": maxfev, "adaptive": True, "initial_simplex": simplex}
+    res = minimize(lambda x: loss(constants(x)), start, method="Nelder-Mead", options=options)
+    return constants(res.x), float(res.fun)
+
+
 def calibrate(
     designs: Sequence,
     counts: Sequence[np.ndarray],
@@ -277,10 +316,7 @@ def calibrate(
     *,
     maxfev: int = 3000,
 ) -> dict[str, float]:
-    """Fit the model's five constants to simulated face counts by least mean TVD.
-
-    Nelder--Mead (adaptive) on (log T, log tau, area power, height weight,
-    roll power), from `x0` with a simplex of 0.3 along each coordinate.
+    """Fit the model's five constants to simulated face counts by least mean TVD (:func:`fit_constants`).
 
     Parameters
     ----------
@@ -297,20 +333,10 @@ def calibrate(
     dict with ``temperature``, ``tau``, ``area_power``, ``height_weight``,
     ``roll_power`` and the fitted ``mean_tvd``.
     """
-    from scipy.optimize import minimize
-
     cases = [(d.polyhedron, d.mass_properties().center, np.asarray(c) / np.sum(c)) for d, c in zip(designs, counts)]
 
-    def constants(x: np.ndarray) -> dict[str, float]:
-        return {"temperature": float(np.exp(x[0])), "tau": float(np.exp(x[1])), "area_power": float(x[2]),
-                "height_weight": float(x[3]), "roll_power": float(x[4])}  # fmt: skip
-
-    def loss(x: np.ndarray) -> float:
-        kw = constants(x)
+    def loss(kw: dict[str, float]) -> float:
         return float(np.mean([0.5 * np.abs(landing_probabilities(poly, c, **kw) - q).sum() for poly, c, q in cases]))
 
-    start = np.array([np.log(x0[0]), np.log(x0[1]), x0[2], x0[3], x0[4]])
-    simplex = np.vstack([start, start + 0.3 * np.eye(len(start))])
-    options = {"xatol": 1e-3, "fatol": 1e-6, "maxfev": maxfev, "adaptive": True, "initial_simplex": simplex}
-    res = minimize(loss, start, method="Nelder-Mead", options=options)
-    return {**constants(res.x), "mean_tvd": float(res.fun)}
+    fitted, mean_tvd = fit_constants(loss, x0, maxfev=maxfev)
+    return {**fitted, "mean_tvd": mean_tvd}
