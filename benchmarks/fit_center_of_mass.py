@@ -31,13 +31,7 @@ sys.path.insert(0, str(ROOT))
 from diefab.core.errors import DesignError, GeometryError  # noqa: E402
 from diefab.models.probabilities import value_probabilities  # noqa: E402
 from diefab.search.fidelity import load_real_dice, noise_tvd, value_tvd  # noqa: E402
-
-
-def deviance(counts: np.ndarray, p: np.ndarray) -> float:
-    """Twice the log-likelihood ratio of the counts' own frequencies to `p`."""
-    seen = counts > 0
-    q = counts[seen] / counts.sum()
-    return 2.0 * float((counts[seen] * np.log(q / np.clip(p[seen], 1e-12, None))).sum())
+from diefab.search.likelihood import deviance  # noqa: E402
 
 
 def fit(die, evals: int) -> dict:

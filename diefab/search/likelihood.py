@@ -38,12 +38,15 @@ def deviance(counts: np.ndarray, p: np.ndarray) -> float:
     0.0
     >>> round(deviance([20, 0], [0.5, 0.5]), 4)  # 2 * 20 * log 2
     27.7259
+    >>> deviance([1, 1], [1.0, 0.0])  # a count where p is 0
+    inf
     """
     c = np.asarray(counts, dtype=float)
     p = np.asarray(p, dtype=float)
     n = c.sum()
     m = c > 0
-    return float(2.0 * np.sum(c[m] * np.log(c[m] / (n * p[m]))))
+    with np.errstate(divide="ignore"):  # a count where p is 0: infinite deviance, not a warning
+        return float(2.0 * np.sum(c[m] * np.log(c[m] / (n * p[m]))))
 
 
 def simulate_die(die: RealDie, settings, drops: int, seed: int, workers=None, scheduler=None) -> dict[str, Any]:
