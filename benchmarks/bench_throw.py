@@ -4,6 +4,8 @@
     nice -n 10 python benchmarks/bench_throw.py --workers 2 --vigor 1,1.5,2,2.5,3 \
         --capture 0,0.01,0.04,0.09,0.16,0.25,0.36,0.64,1 | tee benchmarks/results/bench_throw_capture.txt
     nice -n 10 python benchmarks/bench_throw.py --workers 2 --rest fast | tee benchmarks/results/bench_throw_rest.txt
+    nice -n 10 python benchmarks/bench_throw.py --workers 2 --vigor 0.5,1,1.5,2 --slide 0,10,20,30 \
+        | tee benchmarks/results/bench_throw_slide.txt
 
 (Each prints from the cache in under a minute to five minutes, most of it
 the nested score refitting mixtures of up to 47 candidates.)
@@ -13,7 +15,10 @@ The throw is one number, its vigor (:func:`diefab.physics.throw.throw_settings`)
 default), 2 a hard throw (twice the height and spin, a bouncier table), 3
 as far again.  The table's quasi-static capture (``capture_energy``: a die
 with less energy than this above rest stays in the basin it is in) is a
-second axis, ``--capture``; ``--flat-faces`` holds the faces a die rests on
+second axis, ``--capture``; the horizontal speed a die leaves the hand
+with (``linear_velocity``, uniform from 0 to the candidate's, in any
+direction) a third, ``--slide`` (the prior counts :data:`SLIDE_UNIT` as one
+unit of vigor); ``--flat-faces`` holds the faces a die rests on
 flat (``flat_faces``) at every candidate.  ``--rest MODEL`` adds a landing model
 (``fast``, ``basins``: what ``diefab predict`` gives) as one more candidate, the
 quasi-static limit of the gentlest throw: its probabilities are weighted as if
@@ -32,7 +37,8 @@ of real dice:
 
 A die's candidate is the one of least deviance of the real counts of the
 dice it is fitted on, plus a normal prior toward the default (vigor 1, no
-capture; sd ``--prior`` in vigor and in the square root of the capture),
+capture, no slide; sd ``--prior`` in vigor, in the square root of the
+capture and in slide over :data:`SLIDE_UNIT`),
 or a mixture of the candidates (:func:`diefab.search.mixture.fit_weights`).  It is
 scored on its own simulated drops at that candidate, which took no part in the
 choice.  Rules, none of which sees the die it scores:
@@ -49,7 +55,7 @@ choice.  Rules, none of which sees the die it scores:
   candidate, which alone decides for a die with no other die on its
   surface;
 - ``nested``: the rule, and the part of the grid it chooses among (all;
-  vigor up to 2; no capture; no landing model), chosen for each die by an inner
+  vigor up to 2; no capture; no slide; no landing model), chosen for each die by an inner
   leave-one-out over every other die
   (:func:`diefab.search.crossval.nested_choices`, inner loss the TVD on
   their own drops): the held-out score of choosing, too.
@@ -84,14 +90,19 @@ from diefab.search.published import printed_dice, square_cuboid_dice  # noqa: E4
 #: A landing-model candidate's "vigor" (its capture slot holds the model's name).
 REST = -1.0
 #: Its coordinates for the prior: the gentlest throw (vigor 0) on a table that keeps every die
-#: in the first basin it rests in (capture 1), the quasi-static limit these models assume.
-REST_COORDS = (0.0, 1.0)
+#: in the first basin it rests in (capture 1), with no slide, the quasi-static limit these models assume.
+REST_COORDS = (0.0, 1.0, 0.0)
+#: Horizontal speed (units/s) the prior counts as one unit of vigor: about the speed of a fall of 5 units.
+SLIDE_UNIT = 10.0
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--vigor", default="0.5,1,1.5,2", help="the candidates' vigor, comma-separated (1 must be one)")
     ap.add_argument("--capture", default="0", help="the candidates' capture energy (m g L), comma-separated (0 one)")
+    ap.add_argument("--slide", default="0",
+                    help="the candidates' horizontal speed at release, units/s, comma-separated (0 one): the upper "
+                         "end of a uniform range from 0 (linear_velocity), in any direction")  # fmt: skip
     ap.add_argument("--flat-faces", action="store_true", help="hold the resting faces flat (flat_faces)")
     ap.add_argument("--rest", default="", help="landing models as candidates too, comma-separated (basins, fast)")
     ap.add_argument(
@@ -110,16 +121,21 @@ def main() -> int:
     try:
         vigor = [float(v) for v in args.vigor.split(",")]
         capture = [float(c) for c in args.capture.split(",")]
+        slide = [float(u) for u in args.slide.split(",")]
     except ValueError:
-        raise SystemExit(f"--vigor {args.vigor!r}, --capture {args.capture!r}: numbers separated by commas") from None
-    if 1.0 not in vigor or 0.0 not in capture:
-        raise SystemExit(f"--vigor {args.vigor!r} must include 1 and --capture {args.capture!r} 0: the defaults")
+        raise SystemExit(f"--vigor {args.vigor!r}, --capture {args.capture!r}, --slide {args.slide!r}: "
+                         "numbers separated by commas") from None  # fmt: skip
+    if 1.0 not in vigor or 0.0 not in capture or 0.0 not in slide:
+        raise SystemExit(f"--vigor {args.vigor!r} must include 1, --capture {args.capture!r} and --slide "
+                         f"{args.slide!r} 0: the defaults")  # fmt: skip
     if not all(0 <= v <= MAX_VIGOR for v in vigor) or not all(0 <= c <= 1 for c in capture):
         raise SystemExit(f"--vigor in [0, {MAX_VIGOR:g}] and --capture in [0, 1]")
+    if not all(0 <= u <= 100 for u in slide):
+        raise SystemExit(f"--slide {args.slide!r}: speeds in [0, 100] units/s")
     rest = [m for m in args.rest.split(",") if m]
     if not set(rest) <= set(LANDING_MODELS):
         raise SystemExit(f"--rest {args.rest!r}: landing models among {', '.join(LANDING_MODELS)}")
-    cands = [(v, c) for v in vigor for c in capture] + [(REST, m) for m in rest]
+    cands = [(v, c, u) for v in vigor for c in capture for u in slide] + [(REST, m, 0.0) for m in rest]
     if not args.data.is_dir():
         raise SystemExit(f"no real-rolls folder {args.data}")
     if not args.prior > 0:
@@ -134,23 +150,23 @@ def main() -> int:
     sims = Simulations(CACHE, args.workers)
     freq = np.zeros((len(dice), len(cands)), dtype=object)
     probs = np.zeros((len(dice), len(cands)), dtype=object)
-    for k, (v, cap) in enumerate(cands):
+    for k, (v, cap, u) in enumerate(cands):
         if v == REST:  # the landing model's probabilities, weighted as if drawn from as many drops
             for i, d in enumerate(dice):
                 p = value_probabilities(d.design, cap)
                 freq[i, k], probs[i, k] = p, d.symmetrized(smoothed(p * args.drops))
-            print(f"  {label(v, cap)}: predicted  ({time.perf_counter() - started:.0f} s)", flush=True)
+            print(f"  {label(v, cap, u)}: predicted  ({time.perf_counter() - started:.0f} s)", flush=True)
             continue
         for i, d in enumerate(dice):
-            base = PhysicsSettings(capture_energy=cap, flat_faces=args.flat_faces)
+            base = PhysicsSettings(capture_energy=cap, flat_faces=args.flat_faces, linear_velocity=(0.0, u))
             c = sims.counts_at(d, throw_settings(v, base), args.drops, args.seed)
             freq[i, k], probs[i, k] = c / c.sum(), d.symmetrized(smoothed(c))
-        print(f"  {label(v, cap)}: simulated  ({time.perf_counter() - started:.0f} s)", flush=True)
+        print(f"  {label(v, cap, u)}: simulated  ({time.perf_counter() - started:.0f} s)", flush=True)
     shutdown_pool()
-    coords = np.array([REST_COORDS if v == REST else (v, np.sqrt(c)) for v, c in cands])
-    x0 = np.array([1.0, 0.0])
+    coords = np.array([REST_COORDS if v == REST else (v, np.sqrt(c), u / SLIDE_UNIT) for v, c, u in cands])
+    x0 = np.array([1.0, 0.0, 0.0])
     dev = np.array([[deviance(d.counts, probs[i, k]) for k in range(len(cands))] for i, d in enumerate(dice)])
-    default = cands.index((1.0, 0.0))
+    default = cands.index((1.0, 0.0, 0.0))
 
     everyone = np.ones(len(cands), dtype=bool)
 
@@ -193,9 +209,10 @@ def main() -> int:
     weights = {name: [m([j for j in range(len(dice)) if j != i], i, everyone) for i in range(len(dice))]
                for name, m in methods.items()}  # fmt: skip
     # the nested score: which rule, over which part of the grid, is itself chosen without the held-out die
-    grids = {"": everyone, " vigor<=2": np.array([v <= 2.0 for v, c in cands]),
-             " no capture": np.array([c == 0.0 for v, c in cands]),
-             " no rest": np.array([v != REST for v, c in cands])}  # fmt: skip
+    grids = {"": everyone, " vigor<=2": np.array([v <= 2.0 for v, c, u in cands]),
+             " no capture": np.array([c == 0.0 for v, c, u in cands]),
+             " no slide": np.array([u == 0.0 for v, c, u in cands]),
+             " no rest": np.array([v != REST for v, c, u in cands])}  # fmt: skip
     grids = {g: among for g, among in grids.items() if g == "" or not among.all()}
     choices = nested_choices(
         len(dice), {name + g: (lambda rows, i, m=m, among=among: m(list(rows), i, among))
@@ -203,7 +220,7 @@ def main() -> int:
         scored)  # fmt: skip
     weights["nested"] = [w for _, w, _ in choices]
     columns = {"perfect": [perfect_tvd(d, args.drops) for d in dice]}
-    shown = [k for k, (v, cap) in enumerate(cands) if cap == 0.0 or v == REST]  # capture columns would not fit
+    shown = [k for k, (v, cap, u) in enumerate(cands) if cap == 0.0 or v == REST]  # capture columns would not fit
     columns |= {label(*cands[k]): [value_tvd(d, freq[i, k]) for i, d in enumerate(dice)] for k in shown}
     for name, ws in weights.items():
         columns[name] = [scored(i, w) for i, w in enumerate(ws)]
@@ -211,10 +228,12 @@ def main() -> int:
                 for k in ("ours", "bullet")}  # fmt: skip
     noise = [noise_tvd(d) for d in dice]
 
+    slid = slide != [0.0]
+    grid_text = f"vigor {args.vigor} x capture {args.capture}" + (f" x slide {args.slide}" if slid else "")
+    prior_text = "toward vigor 1 without capture" + (f" or slide (slide in {SLIDE_UNIT:g} units/s)" if slid else "")
     print(f"\nTVD to the real rolls, each die scored on its own {args.drops} drops (seed {args.seed}); "
-          f"candidates: vigor {args.vigor} x capture {args.capture}{', flat faces' * args.flat_faces}; "
-          f"prior sd {args.prior:g} toward vigor 1 without capture; perfect: a perfect model at "
-          f"{args.drops} drops")  # fmt: skip
+          f"candidates: {grid_text}{', flat faces' * args.flat_faces}; prior sd {args.prior:g} {prior_text}; "
+          f"perfect: a perfect model at {args.drops} drops")  # fmt: skip
     for heading, rows in zip(groups, sets):
         if not rows:
             continue
@@ -239,16 +258,16 @@ def main() -> int:
     return 0
 
 
-def chosen_label(w: np.ndarray, cands: list[tuple[float, float | str]]) -> str:
+def chosen_label(w: np.ndarray, cands: list[tuple[float, float | str, float]]) -> str:
     """The candidates of weights `w` of at least 0.2, with their weights when mixed."""
     return "+".join(f"{x:.2f} {label(*cands[k])}" if x < 1 else label(*cands[k]) for k, x in enumerate(w) if x >= 0.2)
 
 
-def label(vigor: float, capture: float | str) -> str:
-    """A candidate's column: its vigor, and its capture when it has one; or the landing model."""
+def label(vigor: float, capture: float | str, slide: float = 0.0) -> str:
+    """A candidate's column: its vigor, and its capture and slide when it has them; or the landing model."""
     if vigor == REST:
         return capture
-    return f"v={vigor:g}" + (f" c={capture:g}" if capture else "")
+    return f"v={vigor:g}" + (f" c={capture:g}" if capture else "") + (f" u={slide:g}" if slide else "")
 
 
 if __name__ == "__main__":

@@ -98,6 +98,56 @@ def test_free_flight_matches_the_engine(gem):
         world.close()
 
 
+def flat_rebound(design, restitution: float, fall: float = 2.0) -> float:
+    """Rebound speed over impact speed of `design` dropped flat on face 0 from `fall` units, at rest, spinless."""
+    settings = PhysicsSettings(restitution=restitution)
+    body = die_body(design.polyhedron, design.mass_properties())
+    rest = rest_height(design, 0)
+    quat = Rotation.from_matrix(face_down(design, 0) @ body.rotation).as_quat()
+    world = World(body, settings, slots=1)
+    try:
+        world.place(0, [0, 0, rest + fall, *quat, 0, 0, 0, 0, 0, 0])
+        heights = []
+        for _ in range(int(2.0 / settings.time_step)):  # the fall takes 0.64 s; a rebound of speed 1 rises 0.64 s
+            world.step()
+            heights.append(world.state(0)[0][2])
+    finally:
+        world.close()
+    heights = np.array(heights)
+    bounced = heights[int(np.argmax(np.diff(heights) > 0)) :]
+    return float(np.sqrt(max(bounced.max() - rest, 0.0) / fall))
+
+
+def test_restitution_is_the_engines_per_body_value_and_a_flat_drop_rebounds_at_about_its_square(cube):
+    """Bullet multiplies the die's and the table's restitution: the rebound is not the setting."""
+    rebound = {r: flat_rebound(cube, r) for r in (0.0, 0.3, 0.6, 0.9, 1.0)}
+    assert rebound[0.0] < 0.01
+    for r in (0.3, 0.6, 0.9, 1.0):
+        assert 0.5 * r**2 <= rebound[r] <= r**2, (r, rebound[r])
+    assert rebound[0.6] < 0.5 * 0.6  # far below the setting itself
+    assert np.all(np.diff(list(rebound.values())) > 0)
+
+
+def test_friction_is_the_engines_per_body_value_and_a_sliding_die_brakes_at_its_square(cube):
+    """A die sliding flat decelerates at mu g, where mu is the product of the die's and the table's friction."""
+    body = die_body(cube.polyhedron, cube.mass_properties())
+    quat = Rotation.from_matrix(face_down(cube, 0) @ body.rotation).as_quat()
+    for f in (0.2, 0.5, 0.8):
+        settings = PhysicsSettings(friction=f)
+        world = World(body, settings, slots=1)
+        try:
+            world.place(0, [0, 0, rest_height(cube, 0), *quat, 8.0, 0, 0, 0, 0, 0])
+            world.step(24)  # the contact settles
+            before = world.state(0)[2][0]
+            world.step(24)
+            after = world.state(0)[2][0]
+        finally:
+            world.close()
+        assert after > 0  # still sliding
+        mu = (before - after) / (24 * settings.time_step) / settings.gravity
+        assert mu == pytest.approx(f**2, rel=0.06), (f, mu)
+
+
 # ----------------------------------------------------------------------
 # sleeping bodies
 
