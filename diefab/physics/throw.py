@@ -5,7 +5,11 @@ real-rolls data (Baktash et al. 2025) simulates a die released at rest,
 in random orientation, on the ground, with ground friction 0.1 and no
 bounce (restitution 0.9 against a ground of 0); diefab's default is the
 paper's throw: a drop from about 5 units with up to 10 rad/s of spin, on a
-table of restitution 0.3 and friction 0.8.  Neither is "right": real
+table of restitution 0.3 and friction 0.8.  Bullet multiplies the die's and
+the table's values (see :class:`~diefab.dice.drop.PhysicsSettings`), and
+diefab gives both the same: the source's die keeps Bullet's default
+friction 0.5, a product of 0.05 with its ground, where vigor 0 gives die
+and table 0.1 each, a product of 0.01.  Neither set-up is "right": real
 throws lie somewhere between, and how a die is thrown matters as much as
 the table.  :func:`throw_settings` spans the two with one number, the
 throw's *vigor* ``v`` in [0, 3], every setting moving linearly between its
