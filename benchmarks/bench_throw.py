@@ -6,6 +6,8 @@
     nice -n 10 python benchmarks/bench_throw.py --workers 2 --rest fast | tee benchmarks/results/bench_throw_rest.txt
     nice -n 10 python benchmarks/bench_throw.py --workers 2 --vigor 0.5,1,1.5,2 --slide 0,10,20,30 \
         | tee benchmarks/results/bench_throw_slide.txt
+    nice -n 10 python benchmarks/bench_throw.py --workers 2 --vigor 0.5,1,1.5,2 --slide 0,10,20,30 --rest fast \
+        --more | tee benchmarks/results/bench_throw_slide_more.txt
 
 (Each prints from the cache in under a minute to five minutes, most of it
 the nested score refitting mixtures of up to 47 candidates.)
