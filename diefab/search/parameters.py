@@ -32,12 +32,12 @@ class Parameter:
 PARAMETERS: dict[str, Parameter] = {
     p.name: p
     for p in (
-        Parameter("restitution", "restitution", 0.0, 0.9, "", "restitution of die and ground"),
-        Parameter("friction", "friction", 0.1, 1.5, "", "Coulomb friction of die and ground"),
+        Parameter("restitution", "restitution", 0.0, 0.9, "", "Bullet's restitution of die and ground, each"),
+        Parameter("friction", "friction", 0.1, 1.5, "", "Bullet's Coulomb friction of die and ground, each"),
         Parameter("rolling_friction", "rolling_friction", 0.0, 0.06, "units", "Bullet's rolling friction"),
         Parameter("spinning_friction", "spinning_friction", 0.0, 0.02, "", "Bullet's spinning friction"),
         Parameter("spin", "angular_velocity", 0.0, 40.0, "rad/s", "upper end of the initial spin range"),
-        Parameter("speed", "linear_velocity", 0.0, 5.0, "units/s", "upper end of the initial horizontal speed"),
+        Parameter("speed", "linear_velocity", 0.0, 30.0, "units/s", "upper end of the initial horizontal speed"),
         Parameter("drop_height", "drop_height", 2.0, 10.0, "units", "drop height of the centre of mass"),
         Parameter("capture", "capture_energy", 0.0, 1.0, "m g L", "quasi-static capture energy", power=2.0),
         Parameter("softness", "table_softness", 0.0, 0.05, "L", "sink of the die into a soft table under its weight"),
