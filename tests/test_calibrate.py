@@ -474,6 +474,21 @@ def test_cli_calibrate_reports_each_die_held_out(tmp_path, run):
     assert kept["tvd_fitted"] == [round(d["tvd"], 4) for d in report["dice"]] and kept["held_out_candidates"] == "grid"
 
 
+def test_cli_calibrate_scores_what_predict_gives_beside_the_fit(tmp_path, run):
+    """Each die also gets diefab predict's TVD, unfitted: a fair cube's model is uniform, so it is analytic."""
+    args = ["calibrate", "--die", "d6", "10,11,9,10,12,8", "--die", "d6", "12,9,10,10,11,8", "--free",
+            "restitution", "--method", "grid", "--grid-points", "3", "--sims-per-eval", "30", "--workers", "1",
+            "--out", tmp_path]  # fmt: skip
+    code, out, err = run(*args, "--json")
+    assert code == 0, err
+    for die in json.loads(out)["dice"]:
+        assert die["predict"]["model"] == "fast"
+        assert die["predict"]["tvd"] == pytest.approx(0.05, abs=1e-3)  # |counts - 10| sums to 6 of 60 rolls
+    code, out, err = run(*args, "--name", "again")
+    assert code == 0, err
+    assert "predict" in out and "is closer to these rolls than the fitted physics" in out
+
+
 def test_the_prior_is_minus_twice_its_log_density_and_is_checked():
     from diefab.dice.design import load_design
     from diefab.search.calibrate import CalibrationError, RealDie, make_spec

@@ -17,7 +17,7 @@ import numpy as np
 
 from diefab.search.realdie import RealDie
 
-__all__ = ["SMOOTHING", "deviance", "die_report", "simulate_die", "smoothed"]
+__all__ = ["SMOOTHING", "deviance", "die_report", "predict_report", "simulate_die", "smoothed"]
 
 #: Pseudo-count added to each value's simulated count (Jeffreys prior).
 SMOOTHING = 0.5
@@ -96,3 +96,19 @@ def die_report(die: RealDie, sim_counts: Sequence[int]) -> dict[str, Any]:
         "df": df,
         "p_value": float(chi2.sf(g2, df)),
     }
+
+
+def predict_report(die: RealDie) -> dict[str, Any]:
+    """What ``diefab predict`` scores on `die`'s real rolls, fitted on no real die.
+
+    ``model`` is its landing model to trust (:func:`diefab.models.choice.best_model`)
+    and ``tvd`` that model's TVD to the real frequencies, compared as
+    :func:`die_report` compares a simulation (symmetrized within the die's groups).
+    """
+    from diefab.models.choice import best_model
+    from diefab.models.probabilities import value_probabilities
+    from diefab.stats.goodness import tvd
+
+    model = best_model(die.design).name
+    p = die.symmetrized(value_probabilities(die.design, model))
+    return {"model": model, "tvd": tvd(die.frequencies, p)}
