@@ -474,6 +474,20 @@ def test_cli_calibrate_reports_each_die_held_out(tmp_path, run):
     assert kept["tvd_fitted"] == [round(d["tvd"], 4) for d in report["dice"]] and kept["held_out_candidates"] == "grid"
 
 
+def test_predict_report_is_the_uniform_cube_and_says_when_the_model_cannot_predict(cube_die, monkeypatch):
+    from diefab.core.errors import GeometryError
+    from diefab.models import probabilities
+    from diefab.search.likelihood import predict_report
+
+    assert predict_report(cube_die) == {"model": "fast", "tvd": pytest.approx(0.05, abs=1e-3)}
+
+    def refuse(design, model):
+        raise GeometryError("no prediction")
+
+    monkeypatch.setattr(probabilities, "value_probabilities", refuse)
+    assert predict_report(cube_die) == {"model": "fast", "tvd": None, "error": "no prediction"}
+
+
 def test_cli_calibrate_scores_what_predict_gives_beside_the_fit(tmp_path, run):
     """Each die also gets diefab predict's TVD, unfitted: a fair cube's model is uniform, so it is analytic."""
     args = ["calibrate", "--die", "d6", "10,11,9,10,12,8", "--die", "d6", "12,9,10,10,11,8", "--free",

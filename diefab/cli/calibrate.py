@@ -363,9 +363,9 @@ def print_report(report) -> None:
     # a narrow terminal folds a long die name, never a figure
     dice = Table(Column(columns[0], overflow="fold"), *(Column(c, no_wrap=True) for c in columns[1:]))
     for d in report["dice"]:
-        start = d.get("start")
+        start, predicted = d.get("start"), d["predict"]["tvd"]
         dice.add_row(d["name"], str(d["rolls"]), f"{d['tvd']:.4f}", *([f"{d['held_out']['tvd']:.4f}"] if held else []),
-                     "-" if start is None else f"{start['tvd']:.4f}", f"{d['predict']['tvd']:.4f}",
+                     "-" if start is None else f"{start['tvd']:.4f}", "-" if predicted is None else f"{predicted:.4f}",
                      f"{d['noise_tvd']:.4f}", f"{d['p_value']:.3g}")  # fmt: skip
     con.print(dice)
     models = "/".join(sorted({d["predict"]["model"] for d in report["dice"]}))
@@ -373,7 +373,7 @@ def print_report(report) -> None:
               f"predict: what diefab predict gives ({models}, fitted on no real die); noise: what sampling alone "
               "gives; p: the fit's deviance against chi-squared")  # fmt: skip
     predicted, fitted = _mean_tvd([d["predict"] for d in report["dice"]]), _mean_tvd(report["dice"])
-    if predicted < fitted:
+    if all(d["predict"]["tvd"] is not None for d in report["dice"]) and predicted < fitted:
         con.print(f"diefab predict, fitted on no real die, is closer to these rolls than the fitted physics (mean TVD "
                   f"{predicted:.4f} against {fitted:.4f} in-sample at {report['drops_per_die']} drops per die): the "
                   "profile does not improve on it for these dice")  # fmt: skip
@@ -389,4 +389,6 @@ def print_report(report) -> None:
 
 
 def _mean_tvd(rows) -> float:
-    return float(np.mean([r["tvd"] for r in rows]))
+    """Mean TVD of the rows that have one (nan if none)."""
+    tvds = [r["tvd"] for r in rows if r["tvd"] is not None]
+    return float(np.mean(tvds)) if tvds else float("nan")

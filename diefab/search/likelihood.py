@@ -103,12 +103,17 @@ def predict_report(die: RealDie) -> dict[str, Any]:
 
     ``model`` is its landing model to trust (:func:`diefab.models.choice.best_model`)
     and ``tvd`` that model's TVD to the real frequencies, compared as
-    :func:`die_report` compares a simulation (symmetrized within the die's groups).
+    :func:`die_report` compares a simulation (symmetrized within the die's groups);
+    None, with the ``error``, where the model cannot predict the die.
     """
+    from diefab.core.errors import DiefabError
     from diefab.models.choice import best_model
     from diefab.models.probabilities import value_probabilities
     from diefab.stats.goodness import tvd
 
     model = best_model(die.design).name
-    p = die.symmetrized(value_probabilities(die.design, model))
+    try:
+        p = die.symmetrized(value_probabilities(die.design, model))
+    except DiefabError as exc:
+        return {"model": model, "tvd": None, "error": str(exc)}
     return {"model": model, "tvd": tvd(die.frequencies, p)}
