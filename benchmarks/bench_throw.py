@@ -80,6 +80,7 @@ from bench_calibrate import Simulations  # noqa: E402
 from bench_heldout import CACHE, REALROLLS, perfect_tvd, surface, table  # noqa: E402
 from bench_mixture import goal  # noqa: E402
 
+from diefab.core.errors import PhysicsError  # noqa: E402
 from diefab.models.probabilities import value_probabilities  # noqa: E402
 from diefab.physics.simulate import PhysicsSettings, shutdown_pool  # noqa: E402
 from diefab.physics.throw import MAX_VIGOR, throw_settings  # noqa: E402
@@ -132,8 +133,11 @@ def main() -> int:
                          f"{args.slide!r} 0: the defaults")  # fmt: skip
     if not all(0 <= v <= MAX_VIGOR for v in vigor) or not all(0 <= c <= 1 for c in capture):
         raise SystemExit(f"--vigor in [0, {MAX_VIGOR:g}] and --capture in [0, 1]")
-    if not all(0 <= u <= 100 for u in slide):
-        raise SystemExit(f"--slide {args.slide!r}: speeds in [0, 100] units/s")
+    try:  # the speeds the physics takes
+        for u in slide:
+            PhysicsSettings(linear_velocity=(0.0, u))
+    except PhysicsError as exc:
+        raise SystemExit(f"--slide {args.slide!r}: {exc}") from None
     rest = [m for m in args.rest.split(",") if m]
     if not set(rest) <= set(LANDING_MODELS):
         raise SystemExit(f"--rest {args.rest!r}: landing models among {', '.join(LANDING_MODELS)}")

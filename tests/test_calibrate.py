@@ -488,18 +488,21 @@ def test_predict_report_is_the_uniform_cube_and_says_when_the_model_cannot_predi
     assert predict_report(cube_die) == {"model": "fast", "tvd": None, "error": "no prediction"}
 
 
-def test_cli_calibrate_scores_what_predict_gives_beside_the_fit(tmp_path, run):
+def test_cli_calibrate_scores_what_predict_gives_beside_the_fit(tmp_path, run, capsys):
     """Each die also gets diefab predict's TVD, unfitted: a fair cube's model is uniform, so it is analytic."""
+    from diefab.cli.calibrate import print_report
+
     args = ["calibrate", "--die", "d6", "10,11,9,10,12,8", "--die", "d6", "12,9,10,10,11,8", "--free",
             "restitution", "--method", "grid", "--grid-points", "3", "--sims-per-eval", "30", "--workers", "1",
             "--out", tmp_path]  # fmt: skip
     code, out, err = run(*args, "--json")
     assert code == 0, err
-    for die in json.loads(out)["dice"]:
+    report = json.loads(out)
+    for die in report["dice"]:
         assert die["predict"]["model"] == "fast"
         assert die["predict"]["tvd"] == pytest.approx(0.05, abs=1e-3)  # |counts - 10| sums to 6 of 60 rolls
-    code, out, err = run(*args, "--name", "again")
-    assert code == 0, err
+    print_report(report)  # what the same run prints without --json
+    out = capsys.readouterr().out
     assert "predict" in out and "is closer to these rolls than the fitted physics" in out
 
 

@@ -114,7 +114,9 @@ def flat_rebound(design, restitution: float, fall: float = 2.0) -> float:
     finally:
         world.close()
     heights = np.array(heights)
-    bounced = heights[int(np.argmax(np.diff(heights) > 0)) :]
+    touch = int(np.argmax(heights <= rest + 0.01 * fall))
+    bottom = touch + int(np.argmin(heights[touch : touch + int(0.2 / settings.time_step)]))  # of the first impact
+    bounced = heights[bottom:]  # the first rebound rises highest
     return float(np.sqrt(max(bounced.max() - rest, 0.0) / fall))
 
 
