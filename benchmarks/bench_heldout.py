@@ -20,6 +20,10 @@ stone (its own surface).
    leaving each of its dice out, and each of its families out, on the
    capture grid ``bench_calibrate.py --free capture --grid 11`` cached
    (fitted on seed-0 drops, the held-out die scored on seed-2 drops).
+   Then where the error comes from: what a perfect model scores at
+   ``--drops`` and ``--score-drops`` simulated drops, beside the default
+   physics at ``--drops`` and pooled over every cached run of 2000 or
+   more drops (its own simulation noise small).
 2. **A throw fitted across dice.**  The throw's vigor
    (:func:`diefab.physics.throw.throw_settings`: 0 a die released at rest just
    above the table with low friction and no bounce, the source's own
@@ -67,7 +71,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from bench_calibrate import Simulations  # noqa: E402
+from bench_calibrate import Simulations, fingerprint, settings_key  # noqa: E402
 
 from diefab.physics.profiles import list_profiles, load_profile, read_profile  # noqa: E402
 from diefab.physics.simulate import PhysicsSettings, shutdown_pool  # noqa: E402
@@ -195,6 +199,7 @@ def main() -> int:
               f"(default {mean_def:.4f} on the same {len(held)} dice); worse than the default by more than "
               f"the noise on: {', '.join(worse) or 'none'}")  # fmt: skip
     printed_table_cv(dice, sims, noise)
+    error_floor(dice, sims, noise, default, args)
 
     # 2. report
     print(f"\n2. Throw vigor (0: released at rest, the source's set-up; 1: the default throw), {args.drops} drops "
@@ -224,7 +229,6 @@ def printed_table_cv(dice, sims, noise) -> None:
     on = list(data.get("calibration", {}).get("dice", []))
     idx = [i for i, d in enumerate(dice) if d.name in on]
     x = np.array(CAPTURE_GRID)
-    from bench_calibrate import fingerprint, settings_key
 
     cached = [i for i, d in enumerate(dice)
               if all((fingerprint(d), settings_key(PhysicsSettings(capture_energy=c)), 2000, s) in sims.table
@@ -284,7 +288,6 @@ def throw_or_table(dice, sims, vigor, probs, grid_tvd, ref, noise, default, prio
     default (1, 0) with sd `prior_sd` in each.  The capture grid's drops are the
     2000 seed-0 drops ``bench_calibrate.py --free capture --grid 11`` cached.
     """
-    from bench_calibrate import fingerprint, settings_key
 
     caps = [c for c in CAPTURE_GRID if c > 0]
     if any((fingerprint(d), settings_key(PhysicsSettings(capture_energy=c)), 2000, 0) not in sims.table
@@ -391,7 +394,6 @@ def table_physics(dice, sims, args, ref, noise) -> None:
     the default, so that the simulation's own noise is small beside the
     real counts'.
     """
-    from bench_calibrate import fingerprint, settings_key
 
     from diefab.search.crossval import RULES, deviance_table, held_out_choices, pick_candidate
 
@@ -444,6 +446,40 @@ def table_physics(dice, sims, args, ref, noise) -> None:
     print(f"  in-sample (fitted on all {len(dice)} dice): {fmt_coords(coords[k])}, mean TVD {np.mean(fitted):.4f} "
           "on the fitting drops")  # fmt: skip
     goal(dice, cols, ref, noise, default)
+
+
+def error_floor(dice, sims, noise, default, args, pooled_from: int = 2000) -> None:
+    """What a perfect model scores at this many drops, beside the default physics pooled over the cache.
+
+    The default is pooled over every cached run of at least `pooled_from`
+    drops at the default physics (any seed): its own simulation noise is
+    then small, and what remains is the default's error on the die.
+    """
+    key = settings_key(PhysicsSettings())
+    rows = []
+    for i, d in enumerate(dice):
+        fp = fingerprint(d)
+        runs = [np.asarray(c, dtype=float) for (f, k, n, _), c in sims.table.items()
+                if f == fp and k == key and n >= pooled_from]  # fmt: skip
+        total = np.sum(runs, axis=0) if runs else None
+        pooled = value_tvd(d, total / total.sum()) if runs else math.nan
+        rows.append((d, noise[i], perfect_tvd(d, args.drops), perfect_tvd(d, args.score_drops), default[i],
+                     pooled, int(total.sum()) if runs else 0))  # fmt: skip
+    head = (
+        f"  {'die':<13} {'rolls':>5} {'noise':>7} {f'perfect {args.drops}':>13} "
+        f"{f'perfect {args.score_drops}':>13} {f'default {args.drops}':>13} {'default pooled':>15} {'drops':>7}"
+    )
+    print(f"\n  Where the error comes from: a perfect model at {args.drops} and {args.score_drops} simulated drops, "
+          f"and the default physics at {args.drops} (seed {args.seed}) and pooled over every cached run of "
+          f"{pooled_from} or more drops")  # fmt: skip
+    print(head)
+    for d, z, p1, p2, d1, dp, n in rows:
+        print(f"  {d.name:<13} {d.n:>5} {z:>7.4f} {p1:>13.4f} {p2:>13.4f} {d1:>13.4f} {dp:>15.4f} {n:>7}")
+    cols = np.array([r[1:6] for r in rows], dtype=float)
+    m = np.nanmean(cols, axis=0)
+    print(f"  {'mean':<13} {'':>5} {m[0]:>7.4f} {m[1]:>13.4f} {m[2]:>13.4f} {m[3]:>13.4f} {m[4]:>15.4f}")
+    print(f"  a perfect model at {args.drops} drops: {m[1] / m[0]:.2f}x the noise; "
+          f"at {args.score_drops}: {m[2] / m[0]:.2f}x")  # fmt: skip
 
 
 def perfect_tvd(die, drops: int, samples: int = 4000, seed: int = 0) -> float:
