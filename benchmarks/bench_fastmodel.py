@@ -396,7 +396,7 @@ def main(argv=None) -> None:
     if not test:  # --designs 0: learning (or calibrating) only
         return
 
-    def chain(poly, center, *, fill=None, inertia=None):
+    def chain_alone(poly, center, *, fill=None, inertia=None):
         return chain.landing_probabilities(poly, center, inertia=inertia, **constants)
 
     def solid_trained(poly, center, *, fill=None, inertia=None):
@@ -409,7 +409,7 @@ def main(argv=None) -> None:
         return fills.made_gem_base(poly, center, inertia, gem_parameters(poly), face_margins(poly, center), at)
 
     # with new chain constants the packaged discrepancy (learned against the old chain) does not apply
-    models = {"fast": MODELS["fast"], "chain": chain, "solid": MODELS["solid-angle"]}
+    models = {"fast": MODELS["fast"], "chain": chain_alone, "solid": MODELS["solid-angle"]}
     if args.fill != "solid":  # the fast model without the fill's correction, and as it was before it knew the fill
         models |= {"no-layer": no_layer, "fast-solid": solid_trained}
     if args.calibrate:

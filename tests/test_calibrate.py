@@ -118,6 +118,22 @@ def test_deviance_is_zero_at_the_frequencies_and_positive_elsewhere():
     assert deviance(c, [1 / 3, 1 / 3, 1 / 3]) > 0
 
 
+def test_a_die_is_compared_up_to_relabelling_within_its_groups(cube_die):
+    """Outcomes the data name only up to relabelling: the least TVD over relabellings, in every report."""
+    from dataclasses import replace
+
+    from diefab.search.likelihood import die_report
+
+    die = replace(cube_die, groups=((0, 1),))  # the real counts are 10, 11, 9, 10, 12, 8 of 60
+    swapped = np.array([11, 10, 9, 10, 12, 8]) / 60
+    assert die.tvd(swapped) == pytest.approx(0.0, abs=1e-12)  # the first two outcomes relabelled
+    assert cube_die.tvd(swapped) == pytest.approx(1 / 60)  # without the group: one roll moved
+    short = np.append(swapped[:5], 0.0)  # 8/60 of the mass on no value: it counts as misplaced
+    assert die.tvd(short) == pytest.approx(0.5 * 8 / 60 + 0.5 * 8 / 60)
+    report = die_report(die, [110, 100, 90, 100, 120, 80])
+    assert report["tvd"] == pytest.approx(0.0, abs=1e-12) and report["simulated"][0] == pytest.approx(110 / 600)
+
+
 def test_smoothing_keeps_unsimulated_values_possible():
     from diefab.search.calibrate import smoothed
 

@@ -103,15 +103,8 @@ def load_real_dice(folder: str | Path | None, *, paper: bool = True, published: 
 
 
 def value_tvd(die: RealDie, p: np.ndarray, q: np.ndarray | None = None) -> float:
-    """TVD of value probabilities `p` (over ``die.design.support``) to `q` (default: the real frequencies).
-
-    Compared up to relabelling within the die's groups; mass `p` is missing counts as on no value.
-    """
-    from diefab.physics.realrolls import grouped_tvd
-
-    p = np.asarray(p, dtype=float)
-    q = die.frequencies if q is None else q
-    return grouped_tvd(p, q, tuple(range(len(p))), die.groups) + 0.5 * max(0.0, 1.0 - float(p.sum()))
+    """:meth:`RealDie.tvd`: `p` to `q` (default: the real frequencies), up to relabelling within the die's groups."""
+    return die.tvd(p, q)
 
 
 def model_tvd(die: RealDie, model: str) -> float:

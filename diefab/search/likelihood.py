@@ -70,7 +70,8 @@ def die_report(die: RealDie, sim_counts: Sequence[int]) -> dict[str, Any]:
     """How well simulated value counts predict `die`'s real rolls.
 
     ``tvd`` compares the real frequencies with the simulated ones
-    (symmetrized within :attr:`RealDie.groups`); ``noise_tvd`` is the TVD that
+    (:meth:`RealDie.tvd`: up to relabelling within the die's groups, as
+    every real-roll figure is compared); ``noise_tvd`` is the TVD that
     sampling alone gives at the die's number of rolls
     (:func:`diefab.stats.goodness.expected_tvd_exact`); ``p_value`` is the chi-squared
     tail of the deviance with k - 1 degrees of freedom (the simulation's own
@@ -78,10 +79,10 @@ def die_report(die: RealDie, sim_counts: Sequence[int]) -> dict[str, Any]:
     """
     from scipy.stats import chi2
 
-    from diefab.stats.goodness import expected_tvd_exact, tvd
+    from diefab.stats.goodness import expected_tvd_exact
 
     counts = np.asarray(sim_counts, dtype=float)
-    p = die.symmetrized(counts / max(counts.sum(), 1))
+    p = counts / max(counts.sum(), 1)
     ps = die.symmetrized(smoothed(counts))
     g2 = deviance(die.counts, ps)
     df = len(die.counts) - 1
@@ -90,7 +91,7 @@ def die_report(die: RealDie, sim_counts: Sequence[int]) -> dict[str, Any]:
         "rolls": die.n,
         "real": die.frequencies.tolist(),
         "simulated": p.tolist(),
-        "tvd": tvd(die.frequencies, p),
+        "tvd": die.tvd(p),
         "noise_tvd": expected_tvd_exact(die.frequencies, die.n),
         "deviance": g2,
         "df": df,
@@ -103,17 +104,16 @@ def predict_report(die: RealDie) -> dict[str, Any]:
 
     ``model`` is its landing model to trust (:func:`diefab.models.choice.best_model`)
     and ``tvd`` that model's TVD to the real frequencies, compared as
-    :func:`die_report` compares a simulation (symmetrized within the die's groups);
-    None, with the ``error``, where the model cannot predict the die.
+    :func:`die_report` compares a simulation (:meth:`RealDie.tvd`); None,
+    with the ``error``, where the model cannot predict the die.
     """
     from diefab.core.errors import DiefabError
     from diefab.models.choice import best_model
     from diefab.models.probabilities import value_probabilities
-    from diefab.stats.goodness import tvd
 
     model = best_model(die.design).name
     try:
-        p = die.symmetrized(value_probabilities(die.design, model))
+        p = value_probabilities(die.design, model)
     except DiefabError as exc:
         return {"model": model, "tvd": None, "error": str(exc)}
-    return {"model": model, "tvd": tvd(die.frequencies, p)}
+    return {"model": model, "tvd": die.tvd(p)}

@@ -87,6 +87,19 @@ class RealDie:
     def frequencies(self) -> np.ndarray:
         return self.counts / self.n
 
+    def tvd(self, p: np.ndarray, q: np.ndarray | None = None) -> float:
+        """TVD of value probabilities `p` (over ``design.support``) to `q` (default: the real frequencies).
+
+        Compared up to relabelling within :attr:`groups`, the least over
+        relabellings: the data do not say which outcome of a group is which
+        face.  Mass missing from `p` counts as on no value.
+        """
+        from diefab.physics.realrolls import grouped_tvd
+
+        p = np.asarray(p, dtype=float)
+        q = self.frequencies if q is None else np.asarray(q, dtype=float)
+        return grouped_tvd(p, q, tuple(range(len(p))), self.groups) + 0.5 * max(0.0, 1.0 - float(p.sum()))
+
     def symmetrized(self, p: np.ndarray) -> np.ndarray:
         """`p` with each group's probabilities replaced by their mean."""
         p = np.array(p, dtype=float)
