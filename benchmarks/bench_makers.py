@@ -1,6 +1,6 @@
 """Nets and prints as makers use them: measured geometry, timings and the README's figures.
 
-    python benchmarks/bench_makers.py [--figures benchmarks/figures] [--out DIR]
+    python benchmarks/bench_makers.py [--figures benchmarks/figures]
 
 Prints, for the shipped dice: the net's value-label heights, text kept inside
 its face, one closed cut outline per piece, Inkscape layers, the footer on
