@@ -40,6 +40,7 @@ Usage::
         [--physics PROFILE] [--capture-energy C]    # validate under a profile / with quasi-static capture
     nice -n 10 python benchmarks/bench_realrolls.py --landing [--dice armadilo_d3,dragon_d3,kitten_d3]
     nice -n 10 python benchmarks/bench_realrolls.py --guard --sims 400 [--record]   # the guard's figures
+    python benchmarks/bench_realrolls.py --domain    # the fast model's correction inside and outside its domain
 """
 
 from __future__ import annotations
@@ -102,8 +103,12 @@ def main() -> None:
     parser.add_argument("--capture-energy", default=None, help="validate --capture-energy (default: off).")
     parser.add_argument("--guard", action="store_true", help="The real-dice guard's figures (in this process).")
     parser.add_argument("--record", action="store_true", help="--guard: record them as the guard's figures.")
+    parser.add_argument("--domain", action="store_true", help="The fast model's correction in and out of its domain.")
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
+    if args.domain:
+        correction_domain(args)
+        return
     if args.guard:
         guard(args)
         return
@@ -196,6 +201,51 @@ def compare_landing(files: list[Path], args) -> None:
         f"for both), {args.workers} workers. rule: the default landing rule (basin and barrier, or still 1 s); "
         "window: --energy-fraction 0 (still 0.1 s on a resting face). gain: window minus rule (positive: the rule "
         f"agrees better with the real rolls). lost: drops cocked or unsettled. {os.cpu_count()} cores (shared machine)"
+    )
+
+
+def correction_domain(args) -> None:
+    """Why the general correction holds only in its domain: each die by the chain alone, by the correction
+    applied regardless of its domain, and by ``fast`` as shipped, against the real counts."""
+    from diefab.models.chain import landing_probabilities
+    from diefab.models.correction import face_features, packaged_correction
+    from diefab.models.probabilities import to_values, value_probabilities
+
+    dice = load_real_dice(args.data, published=True)
+    if args.dice:
+        dice = [d for d in dice if d.name in args.dice.split(",")]
+    correction = packaged_correction()
+    columns = ("chain alone", "forced", "fast")
+    print(f"{'die':<22} {'rolls':>5} {'noise':>7} {'domain':>7} " + " ".join(f"{c:>12}" for c in columns))
+    rows = {}
+    for d in dice:
+        poly, body = d.design.polyhedron, d.design.mass_properties()
+        center, inertia = body.center, body.inertia / body.mass
+        chain = landing_probabilities(poly, center, inertia=inertia, **correction.chain)
+        features, resting = face_features(poly, center, chain)
+        alone = np.where(resting, chain, 0.0)
+        faces = {"chain alone": alone / alone.sum(), "forced": correction.correct(chain, features, resting)}
+        tvd = {k: d.tvd(to_values(d.design, p)) for k, p in faces.items()}
+        tvd["fast"] = d.tvd(value_probabilities(d.design, "fast"))
+        inside = correction.covers(features, resting)
+        rows[d.name] = tvd
+        print(f"{d.name:<22} {d.n:>5} {noise_tvd(d, 4000):>7.4f} {'yes' if inside else 'no':>7} "
+              + " ".join(f"{tvd[c]:>12.4f}" for c in columns), flush=True)  # fmt: skip
+    printed = {d.name for d in printed_dice()}
+    sets = {"the paper's die and the shared dice": [d.name for d in dice if not d.name.startswith("cuboid-")
+                                                    and d.name not in printed],
+            "the shared dice": [d.name for d in dice if not d.name.startswith("cuboid-") and d.name not in printed
+                                and d.name != "paper-gem"],
+            "the source's further printed dice": [d.name for d in dice if d.name in printed],
+            "the published cuboids": [d.name for d in dice if d.name.startswith("cuboid-")]}  # fmt: skip
+    for label, names in sets.items():
+        if names:
+            print(f"mean, {label} ({len(names)}): "
+                  + ", ".join(f"{c} {np.mean([rows[n][c] for n in names]):.4f}" for c in columns))  # fmt: skip
+    print(
+        "\nTVD to the real counts; domain: whether the die lies in the general correction's domain (no "
+        "transitional face, features within the training range); forced: the correction applied regardless; "
+        "fast: as shipped (the chain alone outside the domain; a gem gets the gem correction instead)"
     )
 
 
