@@ -480,6 +480,22 @@ def error_floor(dice, sims, noise, default, args, pooled_from: int = 2000) -> No
     print(f"  {'mean':<13} {'':>5} {m[0]:>7.4f} {m[1]:>13.4f} {m[2]:>13.4f} {m[3]:>13.4f} {m[4]:>15.4f}")
     print(f"  a perfect model at {args.drops} drops: {m[1] / m[0]:.2f}x the noise; "
           f"at {args.score_drops}: {m[2] / m[0]:.2f}x")  # fmt: skip
+    means = perfect_means(dice, args.score_drops)
+    ratio = means / m[0]
+    print(f"  how well {len(dice)} dice measure a mean: a perfect model's mean TVD at {args.score_drops} drops over "
+          f"4000 resamplings of the real counts {means.mean():.4f} (sd {means.std():.4f}); above 1.3x the noise "
+          f"{np.mean(ratio > 1.3):.1%} of the time, 95th percentile {np.quantile(ratio, 0.95):.2f}x")  # fmt: skip
+
+
+def perfect_means(dice, drops: int, samples: int = 4000, seed: int = 0) -> np.ndarray:
+    """(samples,) a perfect model's mean TVD over `dice`, each die's real and simulated counts drawn afresh."""
+    rng = np.random.default_rng(seed)
+    per_die = []
+    for d in dice:
+        real = rng.multinomial(d.n, d.frequencies, size=samples) / d.n
+        sim = rng.multinomial(drops, d.frequencies, size=samples) / drops
+        per_die.append([value_tvd(d, s, r) for s, r in zip(sim, real)])
+    return np.mean(per_die, axis=0)
 
 
 def perfect_tvd(die, drops: int, samples: int = 4000, seed: int = 0) -> float:
