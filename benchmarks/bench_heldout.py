@@ -438,6 +438,14 @@ def table_physics(dice, sims, args, ref, noise) -> None:
     table(dice, {**cols, **ref}, noise)
     print(f"  perfect: what a perfect model scores on average against these real rolls with {args.score_drops} "
           "simulated drops (the real rolls' and the simulation's sampling noise together)")  # fmt: skip
+    features = {}
+    for k, (v, cap, *on) in enumerate(coords):
+        if cap == 0.0:  # the throws and features (the capture grid is in section 1)
+            label = f"v={v:g}" + "".join(f" {n}" for n, x in zip(("rolling", "soft", "rounded"), on) if x)
+            counts = [sims.counts_at(d, cands[k], drops[k], seeds[k]) for d in dice]
+            features[label] = [value_tvd(d, c / max(c.sum(), 1)) for d, c in zip(dice, counts)]
+    print(f"\n  each throw and feature on the fitting drops ({args.physics_drops} per die, seed {args.physics_seed}):")
+    table(dice, features, noise)
     for rule in RULES:
         print(f"  {rule} candidate per die: "
               + ", ".join(f"{d.name} {fmt_coords(coords[choices[rule][i]])}" for i, d in enumerate(dice)))  # fmt: skip
