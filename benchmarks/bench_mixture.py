@@ -198,7 +198,14 @@ def main() -> int:
         cols[name] = [own_tvd(i, weights[name][i]) for i in range(n)]
         fresh[name] = [fresh_tvd(i, weights[name][i]) for i in range(n)]
     print(f"  every method fitted  ({time.perf_counter() - started:.0f} s)", flush=True)
+    table_dice = [i for i, d in enumerate(dice) if surface(d.name) == surface("binom3")]
 
+    print(f"\n0. Each candidate on its fitting drops, in-sample (TVD per die; table: the mean over the "
+          f"{len(table_dice)} dice of the source's table)")  # fmt: skip
+    print(f"  {'candidate':<24} " + " ".join(f"{d:>13}" for d in names) + f" {'table':>8}")
+    for k, c in enumerate(cands):
+        t = [value_tvd(d, freq[i, k]) for i, d in enumerate(dice)]
+        print(f"  {c[0]:<24} " + " ".join(f"{x:>13.4f}" for x in t) + f" {np.mean([t[i] for i in table_dice]):>8.4f}")
     print(f"\n1. Held out, each die scored on its own {args.fit_drops} fitting drops (seed {args.fit_seed}; capture "
           f"at the default throw: 2000, seed 0), which took no part in its choice; {len(cands)} candidates, "
           f"prior sd {args.prior:g}; perfect: a perfect model at {args.fit_drops} drops")  # fmt: skip
