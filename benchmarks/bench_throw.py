@@ -8,6 +8,8 @@
         | tee benchmarks/results/bench_throw_slide.txt
     nice -n 10 python benchmarks/bench_throw.py --workers 2 --vigor 0.5,1,1.5,2 --slide 0,10,20,30 --rest fast \
         --more | tee benchmarks/results/bench_throw_slide_more.txt
+    nice -n 10 python benchmarks/bench_throw.py --workers 2 --rest fast \
+        --more hendecahedron_2d6_sla,hendecahedron_2d6_v5 | tee benchmarks/results/bench_throw_more_2d6.txt
     nice -n 10 python benchmarks/bench_throw.py --workers 2 --vigor 0.5,1,1.5,2 --slide 0,10,20,30 --rest fast \
         --more --score-drops 3000 | tee benchmarks/results/bench_throw_slide_more_fresh.txt
 
@@ -35,7 +37,7 @@ of real dice:
 - *the eight*: the paper's gem and the seven shared dice (``--data``);
 - *the cuboids*: the 15 published steel square cuboids
   (:func:`diefab.search.published.square_cuboid_dice`);
-- with ``--more``, *the source's further dice*: the printed dice shipped
+- with ``--more`` (or ``--more NAME,...`` for some of them), *the source's further dice*: the printed dice shipped
   from the source of the eight (:func:`diefab.search.published.printed_dice`),
   taken as rolled on the source's table, where the files do not say.
 
@@ -116,8 +118,12 @@ def main() -> int:
     ap.add_argument("--rest", default="", help="landing models as candidates too, comma-separated (basins, fast)")
     ap.add_argument(
         "--more",
-        action="store_true",
-        help="add the source's further printed dice (diefab.search.published.printed_dice) as a set",
+        nargs="?",
+        const="all",
+        default="",
+        metavar="DICE",
+        help="add the source's further printed dice (diefab.search.published.printed_dice) as a set: all of "
+        "them, or those named (comma-separated)",
     )
     ap.add_argument("--drops", type=int, default=1000, help="simulated drops per die and candidate")
     ap.add_argument("--seed", type=int, default=3)
@@ -160,9 +166,16 @@ def main() -> int:
         raise SystemExit(f"--score-seed {args.score_seed} must differ from --seed: fresh drops")
     if not args.prior > 0:
         raise SystemExit(f"--prior {args.prior} must be > 0 (inf: none)")
+    further = printed_dice() if args.more else []
+    if args.more and args.more != "all":
+        wanted = args.more.split(",")
+        if unknown := set(wanted) - {d.name for d in further}:
+            raise SystemExit(f"--more {args.more!r}: no further die {', '.join(sorted(unknown))} "
+                             f"(the dice: {', '.join(d.name for d in further)})")  # fmt: skip
+        further = [d for d in further if d.name in wanted]
     started = time.perf_counter()
     groups = {"the eight": load_real_dice(args.data), "the published cuboids": square_cuboid_dice(),
-              "the source's further dice": printed_dice() if args.more else []}  # fmt: skip
+              "the source's further dice": further}  # fmt: skip
     dice = [d for group in groups.values() for d in group]
     set_of = [k for k, group in enumerate(groups.values()) for _ in group]
     sets = [[i for i in range(len(dice)) if set_of[i] == k] for k in range(len(groups))]
