@@ -2,7 +2,7 @@
 
     nice -n 10 python benchmarks/bench_throw.py --workers 2 | tee benchmarks/results/bench_throw.txt
     nice -n 10 python benchmarks/bench_throw.py --workers 2 --vigor 1,1.5,2,2.5,3 \
-        --capture 0,0.01,0.04,0.09,0.16,0.25,0.36,0.64,1 | tee benchmarks/results/bench_throw_capture.txt
+        --capture 0,0.01,0.04,0.09,0.16,0.25,0.36,0.64,1 --each | tee benchmarks/results/bench_throw_capture.txt
     nice -n 10 python benchmarks/bench_throw.py --workers 2 --rest fast | tee benchmarks/results/bench_throw_rest.txt
     nice -n 10 python benchmarks/bench_throw.py --workers 2 --vigor 0.5,1,1.5,2 --slide 0,10,20,30 \
         | tee benchmarks/results/bench_throw_slide.txt
@@ -115,6 +115,7 @@ def main() -> int:
                     help="the candidates' horizontal speed at release, units/s, comma-separated (0 one): the upper "
                          "end of a uniform range from 0 (linear_velocity), in any direction")  # fmt: skip
     ap.add_argument("--flat-faces", action="store_true", help="hold the resting faces flat (flat_faces)")
+    ap.add_argument("--each", action="store_true", help="also print every candidate on its own drops, in-sample")
     ap.add_argument("--rest", default="", help="landing models as candidates too, comma-separated (basins, fast)")
     ap.add_argument(
         "--more",
@@ -260,6 +261,8 @@ def main() -> int:
                 for k in ("ours", "bullet")}  # fmt: skip
     noise = [noise_tvd(d) for d in dice]
 
+    if args.each:
+        each_candidate(dice, groups, sets, cands, freq)
     slid = slide != [0.0]
     grid_text = f"vigor {args.vigor} x capture {args.capture}" + (f" x slide {args.slide}" if slid else "")
     prior_text = "toward vigor 1 without capture" + (f" or slide (slide in {SLIDE_UNIT:g} units/s)" if slid else "")
@@ -340,6 +343,18 @@ def fresh_scores(dice, groups, sets, cands, weights, default, noise, sims, args,
             for r in rules:
                 goal([dice[i] for i in rows], [columns[r][i] for i in rows],
                      [columns[label(*cands[default])][i] for i in rows], [noise[i] for i in rows], r)  # fmt: skip
+
+
+def each_candidate(dice, groups, sets, cands, freq) -> None:
+    """Every candidate on its own drops, in-sample: TVD per die of the first set, and each set's mean."""
+    first = sets[0]
+    heads = [dice[i].name for i in first] + [f"mean {h.split()[-1]}" for h, rows in zip(groups, sets) if rows]
+    print("\nevery candidate on its own drops (in-sample): TVD per die of " + list(groups)[0] + ", and each set's mean")
+    print(f"  {'candidate':<16} " + " ".join(f"{h:>13}" for h in heads))
+    for k, cand in enumerate(cands):
+        t = [value_tvd(d, freq[i, k]) for i, d in enumerate(dice)]
+        means = [np.mean([t[i] for i in rows]) for rows in sets if rows]
+        print(f"  {label(*cand):<16} " + " ".join(f"{x:>13.4f}" for x in [t[i] for i in first] + means))
 
 
 def chosen_label(w: np.ndarray, cands: list[tuple[float, float | str, float]]) -> str:
