@@ -12,6 +12,8 @@
         --more hendecahedron_2d6_sla,hendecahedron_2d6_v5 | tee benchmarks/results/bench_throw_more_2d6.txt
     nice -n 10 python benchmarks/bench_throw.py --workers 2 --vigor 0.5,1,1.5,2 --slide 0,10,20,30 --rest fast \
         --more --score-drops 3000 | tee benchmarks/results/bench_throw_slide_more_fresh.txt
+    nice -n 10 python benchmarks/bench_throw.py --workers 2 --vigor 0.5,1,1.5,2 --slide 0,10,20,30 --rest fast \
+        --more --drops 3000 --seed 6 | tee benchmarks/results/bench_throw_slide_more_3000.txt
 
 (Each prints from the cache in under a minute to five minutes, most of it
 the nested score refitting mixtures of up to 47 candidates.)
