@@ -464,7 +464,7 @@ def error_floor(dice, sims, noise, default, args, pooled_from: int = 2000) -> No
     then small, and what remains is the default's error on the die.
     """
     key = settings_key(PhysicsSettings())
-    rows = []
+    rows, shares = [], {}
     for i, d in enumerate(dice):
         fp = fingerprint(d)
         runs = [np.asarray(c, dtype=float) for (f, k, n, _), c in sims.table.items()
@@ -473,6 +473,7 @@ def error_floor(dice, sims, noise, default, args, pooled_from: int = 2000) -> No
         pooled = value_tvd(d, total / total.sum()) if runs else math.nan
         rows.append((d, noise[i], perfect_tvd(d, args.drops), perfect_tvd(d, args.score_drops), default[i],
                      pooled, int(total.sum()) if runs else 0))  # fmt: skip
+        shares[d.name] = total / total.sum() if runs else None
     head = (
         f"  {'die':<13} {'rolls':>5} {'noise':>7} {f'perfect {args.drops}':>13} "
         f"{f'perfect {args.score_drops}':>13} {f'default {args.drops}':>13} {'default pooled':>15} {'drops':>7}"
@@ -488,6 +489,13 @@ def error_floor(dice, sims, noise, default, args, pooled_from: int = 2000) -> No
     print(f"  {'mean':<13} {'':>5} {m[0]:>7.4f} {m[1]:>13.4f} {m[2]:>13.4f} {m[3]:>13.4f} {m[4]:>15.4f}")
     print(f"  a perfect model at {args.drops} drops: {m[1] / m[0]:.2f}x the noise; "
           f"at {args.score_drops}: {m[2] / m[0]:.2f}x")  # fmt: skip
+    print("  per value, the default pooled, the real frequencies and the source's Bullet set-up:")
+    for d in dice:
+        if shares[d.name] is not None:
+            bullet = d.reference.get("bullet")
+            print(f"  {d.name:<13} default {'/'.join(f'{x:.3f}' for x in shares[d.name])}; "
+                  f"real {'/'.join(f'{x:.3f}' for x in d.frequencies)}"
+                  + (f"; bullet {'/'.join(f'{x:.3f}' for x in bullet)}" if bullet is not None else ""))  # fmt: skip
     means = perfect_means(dice, args.score_drops)
     ratio = means / m[0]
     print(f"  how well {len(dice)} dice measure a mean: a perfect model's mean TVD at {args.score_drops} drops over "
