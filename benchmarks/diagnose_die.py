@@ -116,4 +116,7 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    try:
+        raise SystemExit(main())
+    except DiefabError as exc:
+        raise SystemExit(f"diagnose_die: {exc}") from None
