@@ -76,10 +76,9 @@ import numpy as np
 
 from diefab.core.errors import DiefabError
 from diefab.dice.design import design_to_toml
-from diefab.physics.realrolls import grouped_tvd as grouped
 from diefab.physics.simulate import shutdown_pool
 from diefab.search.calibrate import RealDie, deviance, make_spec, realrolls_die, simulate_die, smoothed
-from diefab.search.fidelity import paper_die
+from diefab.search.fidelity import noise_tvd, paper_die
 from diefab.search.surface import fit_settings, fit_surface, prior_penalty
 
 HERE = Path(__file__).parent
@@ -103,19 +102,6 @@ def load_dice(folder: Path) -> list[RealDie]:
 def fingerprint(die: RealDie) -> str:
     """A short hash of the die's design: the same design shares its simulations, a changed one is simulated anew."""
     return hashlib.sha256(design_to_toml(die.design).encode()).hexdigest()[:16]
-
-
-def grouped_tvd(die: RealDie, p: np.ndarray) -> float:
-    """TVD of `p` to the die's real frequencies, the least over relabellings within its groups."""
-    idx = range(len(p))
-    return grouped(p, die.frequencies, idx, die.groups)
-
-
-def noise_tvd(die: RealDie, samples: int = 4000, seed: int = 0) -> float:
-    """Mean TVD of `die.n` rolls drawn from its observed frequencies (what a perfect model scores)."""
-    rng = np.random.default_rng(seed)
-    draws = rng.multinomial(die.n, die.frequencies, size=samples) / die.n
-    return float(np.mean([grouped_tvd(die, d) for d in draws]))
 
 
 def model_probabilities(die: RealDie, model: str) -> np.ndarray | None:
@@ -249,7 +235,7 @@ def main() -> int:
     surfaces = [fit_surface(xs, c) for c in counts]
 
     def surface_tvd(i: int, x: np.ndarray) -> float:
-        return grouped_tvd(dice[i], dice[i].symmetrized(surfaces[i].probabilities(x)))
+        return dice[i].tvd(dice[i].symmetrized(surfaces[i].probabilities(x)))
 
     # how closely each surface follows its own candidates, against the simulation noise of one candidate
     fit_rows = []
@@ -306,20 +292,20 @@ def main() -> int:
         row = {
             "die": die.name,
             "rolls": die.n,
-            "noise": noise_tvd(die),
-            "default": grouped_tvd(die, fresh(x0)),
-            "loo": grouped_tvd(die, fresh(x_loo)),
-            "material": grouped_tvd(die, fresh(x_mat)),
+            "noise": noise_tvd(die, 4000),
+            "default": die.tvd(fresh(x0)),
+            "loo": die.tvd(fresh(x_loo)),
+            "material": die.tvd(fresh(x_mat)),
             "loo-surface": surface_tvd(i, x_loo),
             "no-prior": surface_tvd(i, x_noprior),
-            "candidate": grouped_tvd(die, die.symmetrized(counts[i][pick] / counts[i][pick].sum())),
+            "candidate": die.tvd(die.symmetrized(counts[i][pick] / counts[i][pick].sum())),
             "in-sample": surface_tvd(i, x_all),
         }
         for model in ("solid-angle", "fast", "basins"):
             p = model_probabilities(die, model)
-            row[model] = None if p is None else grouped_tvd(die, p)
+            row[model] = None if p is None else die.tvd(p)
         for ref in ("ours", "bullet", "ipc"):
-            row[ref] = grouped_tvd(die, die.reference[ref]) if ref in die.reference else None
+            row[ref] = die.tvd(die.reference[ref]) if ref in die.reference else None
         row["settings"] = dict(zip(free, spec.values(x_loo).round(4).tolist()))
         row["material_settings"] = dict(zip(free, spec.values(x_mat).round(4).tolist()))
         row["material_dice"] = [dice[j].name for j in same]

@@ -72,7 +72,7 @@ from bench_heldout import CACHE, CAPTURE_GRID, FEATURES, REALROLLS, family, perf
 from diefab.physics.simulate import PhysicsSettings, shutdown_pool  # noqa: E402
 from diefab.physics.throw import throw_settings  # noqa: E402
 from diefab.search.crossval import nested_choices, pick_candidate, training_rows  # noqa: E402
-from diefab.search.fidelity import load_real_dice, noise_tvd, value_tvd  # noqa: E402
+from diefab.search.fidelity import load_real_dice, noise_tvd  # noqa: E402
 from diefab.search.likelihood import smoothed  # noqa: E402
 from diefab.search.mixture import fit_weights, prior_penalty  # noqa: E402
 
@@ -178,11 +178,11 @@ def main() -> int:
         if any(key not in sims.table for key in keys.values()):
             return float("nan")
         p = sum(w[k] * np.array(sims.table[key], dtype=float) / sum(sims.table[key]) for k, key in keys.items())
-        return value_tvd(dice[i], p / w.sum())
+        return dice[i].tvd(p / w.sum())
 
     def own_tvd(j: int, w: np.ndarray) -> float:
         """TVD on the die's own fitting drops at `w` (held out: neither they nor its real counts chose `w`)."""
-        return value_tvd(dice[j], sum(w[k] * freq[j, k] for k in np.flatnonzero(w)))
+        return dice[j].tvd(sum(w[k] * freq[j, k] for k in np.flatnonzero(w)))
 
     noise = [noise_tvd(d, 4000) for d in dice]
     one_hot = np.eye(len(cands))[default_k]
@@ -204,7 +204,7 @@ def main() -> int:
           f"{len(table_dice)} dice of the source's table)")  # fmt: skip
     print(f"  {'candidate':<24} " + " ".join(f"{d:>13}" for d in names) + f" {'table':>8}")
     for k, c in enumerate(cands):
-        t = [value_tvd(d, freq[i, k]) for i, d in enumerate(dice)]
+        t = [d.tvd(freq[i, k]) for i, d in enumerate(dice)]
         print(f"  {c[0]:<24} " + " ".join(f"{x:>13.4f}" for x in t) + f" {np.mean([t[i] for i in table_dice]):>8.4f}")
     print(f"\n1. Held out, each die scored on its own {args.fit_drops} fitting drops (seed {args.fit_seed}; capture "
           f"at the default throw: 2000, seed 0), which took no part in its choice; {len(cands)} candidates, "
@@ -275,7 +275,7 @@ def cuboids(dice, probs, cands, penalty, sims, args) -> None:
     pen = penalty[throws]
     m = len(cub)
     cols: dict[str, list[float]] = {"perfect": [perfect_tvd(d, args.fit_drops) for d in cub],
-                                    "default": [value_tvd(d, freq[i][-1]) for i, d in enumerate(cub)]}  # fmt: skip
+                                    "default": [d.tvd(freq[i][-1]) for i, d in enumerate(cub)]}  # fmt: skip
 
     def grid(counts, ps) -> np.ndarray:
         dev = np.array([[_dev(c, p[k]) for k in range(len(throws))] for c, p in zip(counts, ps)])
@@ -284,9 +284,9 @@ def cuboids(dice, probs, cands, penalty, sims, args) -> None:
 
     for how, fit in (("grid", grid), ("mix", lambda c, p: fit_weights(c, p, pen))):
         w8 = fit(*eight)
-        cols[f"{how} from the 8"] = [value_tvd(d, w8 @ freq[i]) for i, d in enumerate(cub)]
+        cols[f"{how} from the 8"] = [d.tvd(w8 @ freq[i]) for i, d in enumerate(cub)]
         ws = [fit([cub[j].counts for j in range(m) if j != i], [pr[j] for j in range(m) if j != i]) for i in range(m)]
-        cols[f"{how} loo-cuboids"] = [value_tvd(d, ws[i] @ freq[i]) for i, d in enumerate(cub)]
+        cols[f"{how} loo-cuboids"] = [d.tvd(ws[i] @ freq[i]) for i, d in enumerate(cub)]
         print(f"  {how}: weights (v0.5, v1) fitted on the 8 dice {np.round(w8, 2)}; on the other cuboids "
               + ", ".join(f"{cub[i].name} {np.round(ws[i], 2)}" for i in range(m)))  # fmt: skip
     noise = [noise_tvd(d, 4000) for d in cub]
@@ -306,7 +306,7 @@ def _dev(counts, p) -> float:
 def goal(dice, held, default, noise, label: str) -> None:
     """The goal's checks for one column of held-out scores."""
     ref_dice = [i for i, d in enumerate(dice) if "ours" in d.reference and "bullet" in d.reference]
-    best_source = min(np.mean([value_tvd(dice[i], dice[i].reference[k]) for i in ref_dice]) for k in ("ours", "bullet"))
+    best_source = min(np.mean([dice[i].tvd(dice[i].reference[k]) for i in ref_dice]) for k in ("ours", "bullet"))
     worse = [dice[i].name for i in range(len(dice)) if held[i] > default[i] + noise[i]]
     stone = [held[i] for i, d in enumerate(dice) if d.name == "binom3_stone"]
     print(f"  goal, {label}: mean {np.mean(held):.4f} = {np.mean(held) / np.mean(noise):.2f}x the noise "

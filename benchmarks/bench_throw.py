@@ -95,7 +95,7 @@ from diefab.models.probabilities import value_probabilities  # noqa: E402
 from diefab.physics.simulate import PhysicsSettings, shutdown_pool  # noqa: E402
 from diefab.physics.throw import MAX_VIGOR, throw_settings  # noqa: E402
 from diefab.search.crossval import nested_choices, pick_candidate  # noqa: E402
-from diefab.search.fidelity import LANDING_MODELS, load_real_dice, noise_tvd, value_tvd  # noqa: E402
+from diefab.search.fidelity import LANDING_MODELS, load_real_dice, noise_tvd  # noqa: E402
 from diefab.search.likelihood import deviance, smoothed  # noqa: E402
 from diefab.search.mixture import fit_weights, prior_penalty  # noqa: E402
 from diefab.search.published import printed_dice, square_cuboid_dice  # noqa: E402
@@ -228,7 +228,7 @@ def main() -> int:
 
     def scored(i: int, w: np.ndarray) -> float:
         """TVD of die `i`'s real rolls to its own simulated drops under the candidate weights `w`."""
-        return value_tvd(dice[i], sum(w[k] * freq[i, k] for k in range(len(cands))))
+        return dice[i].tvd(sum(w[k] * freq[i, k] for k in range(len(cands))))
 
     def in_set(i: int) -> int:
         return set_of[i]
@@ -256,10 +256,10 @@ def main() -> int:
     weights["nested"] = [w for _, w, _ in choices]
     columns = {"perfect": [perfect_tvd(d, args.drops) for d in dice]}
     shown = [k for k, (v, cap, u) in enumerate(cands) if cap == 0.0 or v == REST]  # capture columns would not fit
-    columns |= {label(*cands[k]): [value_tvd(d, freq[i, k]) for i, d in enumerate(dice)] for k in shown}
+    columns |= {label(*cands[k]): [d.tvd(freq[i, k]) for i, d in enumerate(dice)] for k in shown}
     for name, ws in weights.items():
         columns[name] = [scored(i, w) for i, w in enumerate(ws)]
-    columns |= {k: [value_tvd(d, d.reference[k]) if k in d.reference else np.nan for d in dice]
+    columns |= {k: [d.tvd(d.reference[k]) if k in d.reference else np.nan for d in dice]
                 for k in ("ours", "bullet")}  # fmt: skip
     noise = [noise_tvd(d) for d in dice]
 
@@ -326,9 +326,9 @@ def fresh_scores(dice, groups, sets, cands, weights, default, noise, sims, args,
                   flush=True)  # fmt: skip
     shutdown_pool()
     columns = {"perfect": [perfect_tvd(d, args.score_drops) for d in dice],
-               label(*cands[default]): [value_tvd(d, fresh[i, default]) for i, d in enumerate(dice)]}  # fmt: skip
+               label(*cands[default]): [d.tvd(fresh[i, default]) for i, d in enumerate(dice)]}  # fmt: skip
     for r in rules:
-        columns[r] = [value_tvd(d, sum(w[k] * fresh[i, k] for k in np.flatnonzero(w)))
+        columns[r] = [d.tvd(sum(w[k] * fresh[i, k] for k in np.flatnonzero(w)))
                       for i, (d, w) in enumerate(zip(dice, weights[r]))]  # fmt: skip
     print(f"\nthe same choices, scored on {args.score_drops} fresh drops of each die (seed {args.score_seed}); "
           f"perfect: a perfect model at {args.score_drops} drops")  # fmt: skip
@@ -354,7 +354,7 @@ def each_candidate(dice, groups, sets, cands, freq) -> None:
     print("\nevery candidate on its own drops (in-sample): TVD per die of " + list(groups)[0] + ", and each set's mean")
     print(f"  {'candidate':<16} " + " ".join(f"{h:>13}" for h in heads))
     for k, cand in enumerate(cands):
-        t = [value_tvd(d, freq[i, k]) for i, d in enumerate(dice)]
+        t = [d.tvd(freq[i, k]) for i, d in enumerate(dice)]
         means = [np.mean([t[i] for i in rows]) for rows in sets if rows]
         print(f"  {label(*cand):<16} " + " ".join(f"{x:>13.4f}" for x in [t[i] for i in first] + means))
 

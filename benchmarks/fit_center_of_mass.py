@@ -30,7 +30,7 @@ sys.path.insert(0, str(ROOT))
 
 from diefab.core.errors import DesignError, GeometryError  # noqa: E402
 from diefab.models.probabilities import value_probabilities  # noqa: E402
-from diefab.search.fidelity import load_real_dice, noise_tvd, value_tvd  # noqa: E402
+from diefab.search.fidelity import load_real_dice, noise_tvd  # noqa: E402
 from diefab.search.likelihood import deviance  # noqa: E402
 
 
@@ -56,7 +56,7 @@ def fit(die, evals: int) -> dict:
     counts = die.counts.astype(float)
     before, after = probabilities(np.zeros(3)), probabilities(res.x)  # the start and the fit, once each
     return {"shift": res.x, "deviance": (deviance(counts, before), deviance(counts, after)),
-            "tvd": (value_tvd(die, before), value_tvd(die, after)), "evals": int(res.nfev)}  # fmt: skip
+            "tvd": (die.tvd(before), die.tvd(after)), "evals": int(res.nfev)}  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> None:

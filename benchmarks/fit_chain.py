@@ -35,7 +35,7 @@ sys.path.insert(0, str(ROOT))
 
 from diefab.models import chain  # noqa: E402
 from diefab.models.probabilities import to_values  # noqa: E402
-from diefab.search.fidelity import load_real_dice, noise_tvd, value_tvd  # noqa: E402
+from diefab.search.fidelity import load_real_dice, noise_tvd  # noqa: E402
 from diefab.search.published import printed_dice, square_cuboid_dice  # noqa: E402
 
 #: The shipped constants, fitted to pybullet.
@@ -57,7 +57,7 @@ class Scorer:
         for i in rows:
             poly, center = self.bodies[i]
             p = chain.landing_probabilities(poly, center, **constants)
-            out.append(value_tvd(self.dice[i], to_values(self.dice[i].design, p)) if np.isfinite(p).all() else 1.0)
+            out.append(self.dice[i].tvd(to_values(self.dice[i].design, p)) if np.isfinite(p).all() else 1.0)
         return np.array(out)
 
     def fit(self, rows, evals: int) -> dict[str, float]:

@@ -35,7 +35,7 @@ from scipy.stats import chi2
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from diefab.search.fidelity import noise_tvd, value_tvd  # noqa: E402
+from diefab.search.fidelity import noise_tvd  # noqa: E402
 from diefab.search.published import square_cuboid_dice  # noqa: E402
 
 
@@ -82,7 +82,7 @@ def main() -> int:
     noise = np.array([noise_tvd(d) for d in dice])
 
     def tvd(i: int, q: float) -> float:
-        return value_tvd(dice[i], np.array([1 - q, q]))
+        return dice[i].tvd(np.array([1 - q, q]))
 
     everyone = np.arange(len(dice))
     print(f"the {len(dice)} published square cuboids ({n.sum()} rolls): smooth laws p_square(x/y), "

@@ -50,7 +50,6 @@ def test_the_shipped_printed_dice_are_the_sources_designs():
     hull, centre of mass or outcome labels would miss it by far more.
     """
     from diefab.models.probabilities import value_probabilities
-    from diefab.search.fidelity import value_tvd
     from diefab.search.published import printed_dice
 
     dice = printed_dice()
@@ -58,7 +57,7 @@ def test_the_shipped_printed_dice_are_the_sources_designs():
         pytest.skip("no printed dice shipped")
     for d in dice:
         assert d.n == d.counts.sum() > 0 and "ours" in d.reference, d.name
-        assert value_tvd(d, value_probabilities(d.design, "basins"), d.reference["ours"]) < 0.02, d.name
+        assert d.tvd(value_probabilities(d.design, "basins"), d.reference["ours"]) < 0.02, d.name
 
 
 def test_landing_model_scores_agree_with_the_guard_on_dice_with_mirror_groups():

@@ -50,7 +50,6 @@ __all__ = [
     "paper_die",
     "simulated_tvd",
     "simulation_key",
-    "value_tvd",
 ]
 
 #: The landing models ``diefab predict`` offers, scored against real dice.
@@ -102,23 +101,18 @@ def load_real_dice(folder: str | Path | None, *, paper: bool = True, published: 
     return dice
 
 
-def value_tvd(die: RealDie, p: np.ndarray, q: np.ndarray | None = None) -> float:
-    """:meth:`RealDie.tvd`: `p` to `q` (default: the real frequencies), up to relabelling within the die's groups."""
-    return die.tvd(p, q)
-
-
 def model_tvd(die: RealDie, model: str) -> float:
     """TVD of a landing model's prediction of `die` (as ``diefab predict --model MODEL``) to its real rolls."""
     from diefab.models.probabilities import value_probabilities
 
-    return value_tvd(die, value_probabilities(die.design, model))
+    return die.tvd(value_probabilities(die.design, model))
 
 
 def landing_model_scores(die: RealDie, *, alpha: float = 0.05, seed: int = 0) -> dict[str, dict[str, Any]]:
     """Each landing model's prediction of `die` against its real rolls, and which model is the one to trust.
 
     Per model: ``predicted`` (value probabilities), ``tvd`` to the real
-    frequencies (:func:`value_tvd`), ``expected_tvd`` (what the rolls would
+    frequencies (:meth:`RealDie.tvd`), ``expected_tvd`` (what the rolls would
     show if the model were right; None where it gives a rolled value no
     chance), ``p_value`` (chi-squared of the counts against it) and
     ``to_trust`` (:func:`diefab.models.choice.best_model`).
@@ -132,7 +126,7 @@ def landing_model_scores(die: RealDie, *, alpha: float = 0.05, seed: int = 0) ->
     for name in LANDING_MODELS:
         p = value_probabilities(die.design, name)
         fit = goodness_of_fit(die.counts, p, alpha=alpha, seed=seed) if np.all(p[die.counts > 0] > 0) else None
-        out[name] = {"predicted": p.tolist(), "tvd": value_tvd(die, p),
+        out[name] = {"predicted": p.tolist(), "tvd": die.tvd(p),
                      "expected_tvd": None if fit is None else fit.expected_tvd_exact,
                      "p_value": 0.0 if fit is None else fit.p_value, "to_trust": name == trust}  # fmt: skip
     return out
@@ -145,7 +139,7 @@ def noise_tvd(die: RealDie, samples: int = 20_000, seed: int = 0) -> float:
     """
     rng = np.random.default_rng(seed)
     draws = rng.multinomial(die.n, die.frequencies, size=samples) / die.n
-    return float(np.mean([value_tvd(die, d) for d in draws]))
+    return float(np.mean([die.tvd(d) for d in draws]))
 
 
 def simulation_key(die: RealDie, settings, drops: int, seed: int) -> str:
@@ -215,7 +209,7 @@ def simulated_tvd(die: RealDie, settings=None, *, drops: int, seed: int = 0, cac
     if settings is None:
         settings = PhysicsSettings.from_mapping(die.design.physics)
     counts = (cache or SimulationCache(None)).counts(die, settings, drops, seed, workers)
-    return value_tvd(die, counts / max(int(counts.sum()), 1))
+    return die.tvd(counts / max(int(counts.sum()), 1))
 
 
 def mean_scores(dice: Sequence[RealDie], scores: Mapping[str, Mapping[str, float]]) -> dict[str, float]:
