@@ -22,8 +22,8 @@ stone (its own surface).
    (fitted on seed-0 drops, the held-out die scored on seed-2 drops).
    Then where the error comes from: what a perfect model scores at
    ``--drops`` and ``--score-drops`` simulated drops, beside the default
-   physics at ``--drops`` and pooled over every cached run of 2000 or
-   more drops (its own simulation noise small).
+   physics at ``--drops`` and at 20,000 drops (its own simulation noise
+   small).
 2. **A throw fitted across dice.**  The throw's vigor
    (:func:`diefab.physics.throw.throw_settings`: 0 a die released at rest just
    above the table with low friction and no bounce, the source's own
@@ -77,7 +77,7 @@ from diefab.physics.profiles import list_profiles, load_profile, read_profile  #
 from diefab.physics.simulate import PhysicsSettings, shutdown_pool  # noqa: E402
 from diefab.physics.throw import throw_settings  # noqa: E402
 from diefab.search.calibrate import deviance, smoothed  # noqa: E402
-from diefab.search.fidelity import load_real_dice, noise_tvd, value_tvd  # noqa: E402
+from diefab.search.fidelity import load_real_dice, noise_tvd  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 REALROLLS = ROOT / ".." / "shared" / "realrolls"
@@ -159,13 +159,13 @@ def main() -> int:
     dice = load_real_dice(args.data)
     sims = Simulations(CACHE, args.workers)
     noise = [noise_tvd(d, 4000) for d in dice]
-    ref = {k: [value_tvd(d, d.reference[k]) if k in d.reference else np.nan for d in dice] for k in ("ours", "bullet")}
+    ref = {k: [d.tvd(d.reference[k]) if k in d.reference else np.nan for d in dice] for k in ("ours", "bullet")}
 
     def tvds(settings) -> list[float]:
         out = []
         for d in dice:
             c = sims.counts_at(d, settings, args.drops, args.seed)
-            out.append(value_tvd(d, c / max(c.sum(), 1)))
+            out.append(d.tvd(c / max(c.sum(), 1)))
         return out
 
     # 2. the throw (simulated first: the profiles' table reuses the default)
@@ -176,7 +176,7 @@ def main() -> int:
         for i, d in enumerate(dice):
             c = sims.counts_at(d, settings, args.drops, args.seed)
             probs[i][k] = smoothed(c)
-            grid_tvd[i, k] = value_tvd(d, c / max(c.sum(), 1))
+            grid_tvd[i, k] = d.tvd(c / max(c.sum(), 1))
         print(f"  vigor {v:g}: simulated  ({time.perf_counter() - started:.0f} s)", flush=True)
 
     # 1. profiles
@@ -258,7 +258,7 @@ def printed_table_cv(dice, sims, noise) -> None:
 
     def score(i: int, g: int) -> float:
         c = test[i][g]
-        return value_tvd(dice[i], c / c.sum())
+        return dice[i].tvd(c / c.sum())
 
     print("\n  printed-table (capture on a grid of 11, fitted on seed-0 drops, scored on 2000 seed-2 drops):")
     print(f"  {'die':<13} {'noise':>7} {'default':>8} {'shipped':>8} {'loo':>8} {'(capture)':>9} {'lofo':>8} "
@@ -301,7 +301,7 @@ def throw_or_table(dice, sims, vigor, probs, grid_tvd, ref, noise, default, prio
         for c in caps:
             counts = sims.counts_at(d, PhysicsSettings(capture_energy=c), 2000, 0, [c])
             cand_p[i].append(smoothed(counts))
-            cand_t[i].append(value_tvd(d, counts / counts.sum()))
+            cand_t[i].append(d.tvd(counts / counts.sum()))
     x = np.array(coords)
     n = len(dice)
 
@@ -342,7 +342,7 @@ def throw_or_table(dice, sims, vigor, probs, grid_tvd, ref, noise, default, prio
         v, c = x[k]
         s = PhysicsSettings(capture_energy=float(c)) if c > 0 else throw_settings(float(v))
         counts = sims.counts_at(dice[i], s, args.score_drops, args.score_seed)
-        return value_tvd(dice[i], counts / max(counts.sum(), 1))
+        return dice[i].tvd(counts / max(counts.sum(), 1))
 
     fresh_default = [fresh(i, default_index) for i in range(n)]
     cols = {"default": fresh_default}
@@ -424,7 +424,7 @@ def table_physics(dice, sims, args, ref, noise) -> None:
 
     def score(i: int, s) -> float:
         c = sims.counts_at(dice[i], s, args.score_drops, args.score_seed)
-        return value_tvd(dice[i], c / max(c.sum(), 1))
+        return dice[i].tvd(c / max(c.sum(), 1))
 
     default = [score(i, PhysicsSettings()) for i in range(len(dice))]
     cols = {"perfect": [perfect_tvd(d, args.score_drops) for d in dice], "default": default}
@@ -443,59 +443,52 @@ def table_physics(dice, sims, args, ref, noise) -> None:
         if cap == 0.0:  # the throws and features (the capture grid is in section 1)
             label = f"v={v:g}" + "".join(f" {n}" for n, x in zip(("rolling", "soft", "rounded"), on) if x)
             counts = [sims.counts_at(d, cands[k], drops[k], seeds[k]) for d in dice]
-            features[label] = [value_tvd(d, c / max(c.sum(), 1)) for d, c in zip(dice, counts)]
+            features[label] = [d.tvd(c / max(c.sum(), 1)) for d, c in zip(dice, counts)]
     print(f"\n  each throw and feature on the fitting drops ({args.physics_drops} per die, seed {args.physics_seed}):")
     table(dice, features, noise)
     for rule in RULES:
         print(f"  {rule} candidate per die: "
               + ", ".join(f"{d.name} {fmt_coords(coords[choices[rule][i]])}" for i, d in enumerate(dice)))  # fmt: skip
     k = pick_candidate(dev, range(len(dice)), coords, x0, args.prior)
-    fitted = [value_tvd(d, probs[i][k] / probs[i][k].sum()) for i, d in enumerate(dice)]
+    fitted = [d.tvd(probs[i][k] / probs[i][k].sum()) for i, d in enumerate(dice)]
     print(f"  in-sample (fitted on all {len(dice)} dice): {fmt_coords(coords[k])}, mean TVD {np.mean(fitted):.4f} "
           "on the fitting drops")  # fmt: skip
     goal(dice, cols, ref, noise, default)
 
 
-def error_floor(dice, sims, noise, default, args, pooled_from: int = 2000) -> None:
-    """What a perfect model scores at this many drops, beside the default physics pooled over the cache.
+def error_floor(dice, sims, noise, default, args, long_drops: int = 20_000, long_seed: int = 7) -> None:
+    """What a perfect model scores at this many drops, beside the default physics on many drops.
 
-    The default is pooled over every cached run of at least `pooled_from`
-    drops at the default physics (any seed): its own simulation noise is
-    then small, and what remains is the default's error on the die.
+    The default at `long_drops` drops (seed `long_seed`, cached like every
+    run): its own simulation noise is then small, and what remains is the
+    default's error on the die.
     """
-    key = settings_key(PhysicsSettings())
     rows, shares = [], {}
     for i, d in enumerate(dice):
-        fp = fingerprint(d)
-        runs = [np.asarray(c, dtype=float) for (f, k, n, _), c in sims.table.items()
-                if f == fp and k == key and n >= pooled_from]  # fmt: skip
-        total = np.sum(runs, axis=0) if runs else None
-        pooled = value_tvd(d, total / total.sum()) if runs else math.nan
+        c = sims.counts_at(d, PhysicsSettings(), long_drops, long_seed)
+        shares[d.name] = c / c.sum()
         rows.append((d, noise[i], perfect_tvd(d, args.drops), perfect_tvd(d, args.score_drops), default[i],
-                     pooled, int(total.sum()) if runs else 0))  # fmt: skip
-        shares[d.name] = total / total.sum() if runs else None
+                     d.tvd(shares[d.name])))  # fmt: skip
     head = (
         f"  {'die':<13} {'rolls':>5} {'noise':>7} {f'perfect {args.drops}':>13} "
-        f"{f'perfect {args.score_drops}':>13} {f'default {args.drops}':>13} {'default pooled':>15} {'drops':>7}"
+        f"{f'perfect {args.score_drops}':>13} {f'default {args.drops}':>13} {f'default {long_drops}':>15}"
     )
     print(f"\n  Where the error comes from: a perfect model at {args.drops} and {args.score_drops} simulated drops, "
-          f"and the default physics at {args.drops} (seed {args.seed}) and pooled over every cached run of "
-          f"{pooled_from} or more drops")  # fmt: skip
+          f"and the default physics at {args.drops} (seed {args.seed}) and at {long_drops} drops "
+          f"(seed {long_seed})")  # fmt: skip
     print(head)
-    for d, z, p1, p2, d1, dp, n in rows:
-        print(f"  {d.name:<13} {d.n:>5} {z:>7.4f} {p1:>13.4f} {p2:>13.4f} {d1:>13.4f} {dp:>15.4f} {n:>7}")
-    cols = np.array([r[1:6] for r in rows], dtype=float)
-    m = np.nanmean(cols, axis=0)
+    for d, z, p1, p2, d1, dl in rows:
+        print(f"  {d.name:<13} {d.n:>5} {z:>7.4f} {p1:>13.4f} {p2:>13.4f} {d1:>13.4f} {dl:>15.4f}")
+    m = np.mean(np.array([r[1:] for r in rows], dtype=float), axis=0)
     print(f"  {'mean':<13} {'':>5} {m[0]:>7.4f} {m[1]:>13.4f} {m[2]:>13.4f} {m[3]:>13.4f} {m[4]:>15.4f}")
     print(f"  a perfect model at {args.drops} drops: {m[1] / m[0]:.2f}x the noise; "
           f"at {args.score_drops}: {m[2] / m[0]:.2f}x")  # fmt: skip
-    print("  per value, the default pooled, the real frequencies and the source's Bullet set-up:")
+    print(f"  per value, the default at {long_drops} drops, the real frequencies and the source's Bullet set-up:")
     for d in dice:
-        if shares[d.name] is not None:
-            bullet = d.reference.get("bullet")
-            print(f"  {d.name:<13} default {'/'.join(f'{x:.3f}' for x in shares[d.name])}; "
-                  f"real {'/'.join(f'{x:.3f}' for x in d.frequencies)}"
-                  + (f"; bullet {'/'.join(f'{x:.3f}' for x in bullet)}" if bullet is not None else ""))  # fmt: skip
+        bullet = d.reference.get("bullet")
+        print(f"  {d.name:<13} default {'/'.join(f'{x:.3f}' for x in shares[d.name])}; "
+              f"real {'/'.join(f'{x:.3f}' for x in d.frequencies)}"
+              + (f"; bullet {'/'.join(f'{x:.3f}' for x in bullet)}" if bullet is not None else ""))  # fmt: skip
     means = perfect_means(dice, args.score_drops)
     ratio = means / m[0]
     print(f"  how well {len(dice)} dice measure a mean: a perfect model's mean TVD at {args.score_drops} drops over "
@@ -510,7 +503,7 @@ def perfect_means(dice, drops: int, samples: int = 4000, seed: int = 0) -> np.nd
     for d in dice:
         real = rng.multinomial(d.n, d.frequencies, size=samples) / d.n
         sim = rng.multinomial(drops, d.frequencies, size=samples) / drops
-        per_die.append([value_tvd(d, s, r) for s, r in zip(sim, real)])
+        per_die.append([d.tvd(s, r) for s, r in zip(sim, real)])
     return np.mean(per_die, axis=0)
 
 
@@ -519,7 +512,7 @@ def perfect_tvd(die, drops: int, samples: int = 4000, seed: int = 0) -> float:
     rng = np.random.default_rng(seed)
     real = rng.multinomial(die.n, die.frequencies, size=samples) / die.n
     sim = rng.multinomial(drops, die.frequencies, size=samples) / drops
-    return float(np.mean([value_tvd(die, s, r) for s, r in zip(sim, real)]))
+    return float(np.mean([die.tvd(s, r) for s, r in zip(sim, real)]))
 
 
 def fmt_coords(x: np.ndarray) -> str:
