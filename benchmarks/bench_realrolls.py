@@ -204,6 +204,15 @@ def compare_landing(files: list[Path], args) -> None:
     )
 
 
+def die_sets(dice) -> dict[str, list]:
+    """The dice with real rolls by set: the paper's die and the shared dice, the source's further dice, the cuboids."""
+    printed = {d.name for d in printed_dice()}
+    return {"the paper's die and the shared dice": [d for d in dice if not d.name.startswith("cuboid-")
+                                                    and d.name not in printed],
+            "the source's further printed dice": [d for d in dice if d.name in printed],
+            "the published cuboids": [d for d in dice if d.name.startswith("cuboid-")]}  # fmt: skip
+
+
 def correction_domain(args) -> None:
     """Why the general correction holds only in its domain: each die by the chain alone, by the correction
     applied regardless of its domain, and by ``fast`` as shipped, against the real counts."""
@@ -231,17 +240,14 @@ def correction_domain(args) -> None:
         rows[d.name] = tvd
         print(f"{d.name:<22} {d.n:>5} {noise_tvd(d, 4000):>7.4f} {'yes' if inside else 'no':>7} "
               + " ".join(f"{tvd[c]:>12.4f}" for c in columns), flush=True)  # fmt: skip
-    printed = {d.name for d in printed_dice()}
-    sets = {"the paper's die and the shared dice": [d.name for d in dice if not d.name.startswith("cuboid-")
-                                                    and d.name not in printed],
-            "the shared dice": [d.name for d in dice if not d.name.startswith("cuboid-") and d.name not in printed
-                                and d.name != "paper-gem"],
-            "the source's further printed dice": [d.name for d in dice if d.name in printed],
-            "the published cuboids": [d.name for d in dice if d.name.startswith("cuboid-")]}  # fmt: skip
-    for label, names in sets.items():
-        if names:
-            print(f"mean, {label} ({len(names)}): "
-                  + ", ".join(f"{c} {np.mean([rows[n][c] for n in names]):.4f}" for c in columns))  # fmt: skip
+    sets = die_sets(dice)
+    shared = [d for d in sets["the paper's die and the shared dice"] if d.name != "paper-gem"]
+    sets = {"the paper's die and the shared dice": sets.pop("the paper's die and the shared dice"),
+            "the shared dice": shared, **sets}  # fmt: skip
+    for label, group in sets.items():
+        if group:
+            print(f"mean, {label} ({len(group)}): "
+                  + ", ".join(f"{c} {np.mean([rows[d.name][c] for d in group]):.4f}" for c in columns))  # fmt: skip
     print(
         "\nTVD to the real counts; domain: whether the die lies in the general correction's domain (no "
         "transitional face, features within the training range); forced: the correction applied regardless; "
@@ -265,12 +271,7 @@ def guard(args) -> None:
         print(f"{d.name:<13} {d.n:>5} {noise_tvd(d, 4000):>8.4f} " + " ".join(f"{scores[d.name][c]:>13.4f}"
                                                                          for c in columns))  # fmt: skip
     mean = mean_scores(dice, scores)
-    printed = {d.name for d in printed_dice()}
-    groups = {"the paper's die and the shared dice": [d for d in dice if not d.name.startswith("cuboid-")
-                                                      and d.name not in printed],
-              "the source's further printed dice": [d for d in dice if d.name in printed],
-              "the published cuboids": [d for d in dice if d.name.startswith("cuboid-")]}  # fmt: skip
-    for label, group in groups.items():
+    for label, group in die_sets(dice).items():
         if group:
             m = mean_scores(group, scores)
             print(f"mean, {label} ({len(group)}): " + ", ".join(f"{c} {m[c]:.4f}" for c in columns))

@@ -90,13 +90,14 @@ def main() -> int:
 
     values = design.support
     basins_v = to_values(design, shares)
+    sim_v = to_values(design, sim) if sim is not None else None
     print("\n  per value: basins model, drops at the default physics, real frequencies")
     for k, v in enumerate(values):
-        drops_v = f"{to_values(design, sim)[k]:.3f}" if sim is not None else "-"
+        drops_v = f"{sim_v[k]:.3f}" if sim_v is not None else "-"
         print(f"  value {v!s:>4}  basins {basins_v[k]:.3f}  drops {drops_v:>5}  real {die.frequencies[k]:.3f}")
     print(f"  TVD to the real rolls (up to relabelling within mirror-image groups): basins {die.tvd(basins_v):.4f}"
-          + (f", drops {die.tvd(to_values(design, sim)):.4f} ({lost} of {args.drops} cocked or unsettled)"
-             if sim is not None else ""))  # fmt: skip
+          + (f", drops {die.tvd(sim_v):.4f} ({lost} of {args.drops} cocked or unsettled)"
+             if sim_v is not None else ""))  # fmt: skip
     print(f"  (basin shares exact to {bound:.1e})")
 
     if args.shift_mm:
