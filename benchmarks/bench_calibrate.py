@@ -57,7 +57,9 @@ values, for comparison); the in-sample fit (all dice, the optimistic
 bound); the solid-angle, fast and basins models; the source's own
 quasi-static model (``ours``) and Bullet and IPC simulations; and the TVD
 sampling noise alone gives at the die's number of rolls (Monte-Carlo at
-the observed frequencies).  Then which parameters the fit leans on.
+the observed frequencies).  Then, for a surface design, how far the
+surfaces are from fresh drops where the fit on the printed dice lands, and
+which parameters the fit leans on.
 
 Simulated counts are cached in ``--cache`` (one JSON line per design,
 setting, drop count and seed), so an interrupted run continues where it
@@ -274,6 +276,8 @@ def main() -> int:
 
     everyone = list(range(len(dice)))
     x_all = calibrate(everyone, args.prior, args.refine)
+    printed = [i for i in everyone if materials[i] == PRINTED]
+    x_printed = calibrate(printed, args.prior, args.refine) if printed and not args.grid else None
     rows, fitted = [], []
     for i, die in enumerate(dice):
         train = [j for j in everyone if j != i]
@@ -314,6 +318,13 @@ def main() -> int:
               + f"; by material ({materials[i]}, {len(same)} dice): "
               + (" ".join(f"{n}={v:.3g}" for n, v in row["material_settings"].items()) if same else "the defaults")
               + f"  ({time.perf_counter() - started:.0f} s)", flush=True)  # fmt: skip
+    # where the fit lands, is the surface still the simulation? The printed dice's own fit, on fresh drops
+    surface_check = []
+    if x_printed is not None:
+        for i in printed:
+            c = sims.counts(dice[i], spec, x_printed, args.predict_drops, args.predict_seed)
+            fresh_tvd = dice[i].tvd(dice[i].symmetrized(c / max(c.sum(), 1)))
+            surface_check.append((dice[i].name, surface_tvd(i, x_printed), fresh_tvd))
     shutdown_pool()
     seconds = time.perf_counter() - started
 
@@ -350,6 +361,16 @@ def main() -> int:
     print("\nresponse surfaces: mean TVD to their own candidates' frequencies (the simulation noise of one candidate)")
     for name, gap, expected in fit_rows:
         print(f"  {name:<14}{gap:.4f} ({expected:.4f})")
+
+    if surface_check:
+        print(
+            f"\nthe surfaces where the fit lands: the fit on the {len(printed)} printed dice (in-sample: "
+            + " ".join(f"{n}={v:.3g}" for n, v in zip(free, spec.values(x_printed)))
+            + f"), TVD to the real rolls by the surface and by {args.predict_drops} fresh drops (seed "
+            f"{args.predict_seed})"
+        )
+        for name, by_surface, by_drops in surface_check:
+            print(f"  {name:<14}surface {by_surface:.4f}   drops {by_drops:.4f}")
 
     # which settings the fit leans on: the rise of the total deviance when one setting sweeps its range
     total = lambda x: sum(deviance(d.counts, d.symmetrized(s.smoothed(x))) for d, s in zip(dice, surfaces))  # noqa: E731

@@ -45,6 +45,7 @@ BENCHMARKS = [
     ("bench_basins.py", [], []),
     ("bench_many_faces.py", [], ["--sims", "40"]),
     ("bench_fair_shapes.py", [], ["--faces", "22", "--sims", "600"]),
+    ("robust_gem.py", [], ["--evals", "2", "--sims", "500"]),
 ]
 
 
