@@ -295,6 +295,7 @@ def learn(training: TrainingSet, drops: int, seed: int, design_seed: int = TRAIN
 
 def ablation(training: TrainingSet, test, test_q) -> None:
     """Cross-validated TVD by coordinates and training-set size; the test set with the parameters alone."""
+    from diefab.models import chain
 
     smoothing = discrepancy.gem_discrepancy().smoothing
     print(f"\nablation ({FOLDS}-fold CV on the training set at its drops, noise included; smoothing {smoothing:g})")
@@ -304,11 +305,11 @@ def ablation(training: TrainingSet, test, test_q) -> None:
             err = training.cross_validate(n, smoothing=smoothing, physics_coordinates=physics)
             print(f"{label:<28} {n:7d} {np.median(err):7.4f} {err.mean():7.4f}")
     err, near = training.cross_validate(smoothing=smoothing, distances=True)
-    chain = np.array([tvd(p, q) for p, q in zip(training.p, training.q)])
+    chain_tvd = np.array([tvd(p, q) for p, q in zip(training.p, training.q)])
     lo, hi = np.quantile(near, [1 / 8, 7 / 8])
     print(f"held-out gems by distance to their nearest training gem: nearest eighth (<= {lo:.3f}) median TVD "
           f"{np.median(err[near <= lo]):.4f}; farthest eighth (>= {hi:.3f}) {np.median(err[near >= hi]):.4f}, "
-          f"chain alone there {np.median(chain[near >= hi]):.4f}")  # fmt: skip
+          f"chain alone there {np.median(chain_tvd[near >= hi]):.4f}")  # fmt: skip
     shape = training.learn(smoothing=smoothing, physics_coordinates=False)
     err = []
     for d, q in zip(test, test_q):

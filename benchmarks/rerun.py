@@ -38,7 +38,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 #: Wall times, load and what the cache held: they change from run to run and are not figures of the benchmark.
 VOLATILE = re.compile(
-    r"\d[\d,]*(\.\d+)?\s?(ms|s|seconds|minutes)\b|load( average)? \d+(\.\d+)?|[\d,]+ drops simulated|"
+    r"\d[\d,]*(\.\d+)?\s?(µs|us|ms|s|seconds|minutes)\b|load( average)? \d+(\.\d+)?|[\d,]+ drops simulated|"
     r"\(\d+ replayed\)|[\d.]+ drops/s|wall time .*"
 )
 
