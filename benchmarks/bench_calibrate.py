@@ -274,6 +274,11 @@ def main() -> int:
                                 starts=[x, *starts])  # fmt: skip
         return x
 
+    def fresh(i: int, x: np.ndarray) -> np.ndarray:
+        """Die `i`'s value frequencies on fresh drops at `x` (the predictions' drops and seed), symmetrized."""
+        c = sims.counts(dice[i], spec, x, args.predict_drops, args.predict_seed)
+        return dice[i].symmetrized(c / max(c.sum(), 1))
+
     everyone = list(range(len(dice)))
     x_all = calibrate(everyone, args.prior, args.refine)
     printed = [i for i in everyone if materials[i] == PRINTED]
@@ -289,17 +294,13 @@ def main() -> int:
         pick = int(np.argmin(dev[train].sum(axis=0)))
         fitted.append(x_loo)
 
-        def fresh(x: np.ndarray, die=die) -> np.ndarray:
-            c = sims.counts(die, spec, x, args.predict_drops, args.predict_seed)
-            return die.symmetrized(c / max(c.sum(), 1))
-
         row = {
             "die": die.name,
             "rolls": die.n,
             "noise": noise_tvd(die, 4000),
-            "default": die.tvd(fresh(x0)),
-            "loo": die.tvd(fresh(x_loo)),
-            "material": die.tvd(fresh(x_mat)),
+            "default": die.tvd(fresh(i, x0)),
+            "loo": die.tvd(fresh(i, x_loo)),
+            "material": die.tvd(fresh(i, x_mat)),
             "loo-surface": surface_tvd(i, x_loo),
             "no-prior": surface_tvd(i, x_noprior),
             "candidate": die.tvd(die.symmetrized(counts[i][pick] / counts[i][pick].sum())),
@@ -322,9 +323,7 @@ def main() -> int:
     surface_check = []
     if x_printed is not None:
         for i in printed:
-            c = sims.counts(dice[i], spec, x_printed, args.predict_drops, args.predict_seed)
-            fresh_tvd = dice[i].tvd(dice[i].symmetrized(c / max(c.sum(), 1)))
-            surface_check.append((dice[i].name, surface_tvd(i, x_printed), fresh_tvd))
+            surface_check.append((dice[i].name, surface_tvd(i, x_printed), dice[i].tvd(fresh(i, x_printed))))
     shutdown_pool()
     seconds = time.perf_counter() - started
 

@@ -11,6 +11,7 @@ command wrote.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import re
 import subprocess
@@ -26,24 +27,14 @@ SIMULATING = ("validate", "design", "calibrate", "optimize")
 #: Commands that take minutes: their pages are marked slow.
 SLOW = ("design", "calibrate", "optimize", "validate")
 NUMBER = re.compile(r"[−+-]?\d[\d,]*(?:\.\d+)?")
+_SPEC = importlib.util.spec_from_file_location("rerun", ROOT / "benchmarks" / "rerun.py")
+_RERUN = importlib.util.module_from_spec(_SPEC)
+_SPEC.loader.exec_module(_RERUN)  # the console blocks are read as benchmarks/rerun.py --docs reads them
 
 
 def console_blocks(page: Path) -> list[tuple[str, list[str]]]:
     """``[(command, quoted output lines), ...]`` of the page's console blocks, in order."""
-    out, block, command = [], False, None
-    for line in page.read_text(encoding="utf-8").splitlines():
-        if line.startswith("```"):
-            block = line.strip() == "```console"
-            command = None
-            continue
-        if not block:
-            continue
-        if line.startswith("$ "):
-            command = line[2:].strip()
-            out.append((command, []))
-        elif command is not None:
-            out[-1][1].append(line)
-    return [(c, q) for c, q in out if c.startswith("diefab ")]
+    return _RERUN.console_sections(page.read_text(encoding="utf-8"))
 
 
 def _skeleton(line: str) -> str:
