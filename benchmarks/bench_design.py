@@ -89,8 +89,10 @@ def main() -> int:
 
 def _save(rows: list[dict], path: Path) -> None:
     """Write the rows so far (an interrupted run keeps the targets it finished)."""
+    from diefab.core.files import atomic_write
+
     path.parent.mkdir(exist_ok=True)
-    path.write_text(json.dumps(rows, indent=2) + "\n")
+    atomic_write(path, json.dumps(rows, indent=2) + "\n")
 
 
 if __name__ == "__main__":

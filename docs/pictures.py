@@ -1,7 +1,9 @@
-"""Regenerate the pictures of the README and the docs: ``python docs/pictures.py`` from the repository root.
+"""Regenerate the pictures of the README and the docs: ``python docs/pictures.py [readme|design]``.
 
 Runs the commands the docs show (``diefab net``, ``diefab stl --preview``,
 ``diefab validate --plot``) into a temporary folder and writes docs/img/.
+``design`` draws the nets of the dice in benchmarks/results/design-dice/ (the
+design files of a ``benchmarks/bench_design.py`` run; the designing page's pictures).
 """
 
 import subprocess
@@ -16,6 +18,7 @@ import matplotlib.image as mpimg  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 
 IMG = Path(__file__).parent / "img"
+DESIGN_DICE = Path(__file__).parent.parent / "benchmarks" / "results" / "design-dice"
 
 
 def diefab(*args: str) -> None:
@@ -36,7 +39,7 @@ def crop(image, pad: int = 20):
     return image[max(r[0] - pad, 0) : r[-1] + pad, max(c[0] - pad, 0) : c[-1] + pad]
 
 
-def main() -> None:
+def readme_pictures() -> None:
     IMG.mkdir(exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp)
@@ -66,5 +69,26 @@ def main() -> None:
         diefab("validate", "fudge-gem-print", "--sims", "10000", "--seed", "1", "--plot", str(IMG / "validate.png"))
 
 
+def design_nets() -> None:
+    """The net of every die in benchmarks/results/design-dice/, cut to its pieces."""
+    figures = IMG / "figures"
+    with tempfile.TemporaryDirectory() as tmp:
+        for die in sorted(DESIGN_DICE.glob("*.toml")):
+            diefab("net", str(die), "--format", "png", "--out", tmp)
+            net = crop(mpimg.imread(Path(tmp) / f"{die.stem}-net.png"))
+            mpimg.imsave(figures / f"design-{die.stem}-net.png", net[..., :3])
+
+
+def main(which: list[str]) -> None:
+    unknown = set(which) - {"readme", "design"}
+    if unknown:
+        print(f"pictures.py: unknown set {sorted(unknown)[0]!r} (readme, design)", file=sys.stderr)
+        sys.exit(2)
+    if not which or "readme" in which:
+        readme_pictures()
+    if not which or "design" in which:
+        design_nets()
+
+
 if __name__ == "__main__":
-    main()
+    main(sys.argv[1:])
