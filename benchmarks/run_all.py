@@ -25,6 +25,7 @@ BENCHMARKS = [
     ("bench_fastmodel.py", [], ["--designs", "4", "--drops", "3000"]),
     ("bench_families.py", ["--designs", "4", "--drops", "3000"], ["--designs", "1", "--drops", "500"]),
     ("bench_simopt.py", [], ["--budget", "1", "--validate", "3000"]),
+    ("bench_shaped.py", [], ["--targets", "3df", "--seeds", "0"]),
     (
         "bench_calibrate.py",
         [],
