@@ -48,6 +48,14 @@ asymmetric tab layout, ``train-paper-607`` 30 and ``train-print-606`` 27 at
 only the gems not yet in the cache.
 
 Measure the result on gems of another seed with ``bench_fastmodel.py --fill FILL --test-seed 707``.
+
+``--learning-curve 42,84,112`` learns nothing and writes nothing: it scores
+the packaged correction's choice (its linear part alone, then with its kernel
+term, if it has one) by the same 5-fold cross-validation on the first 42, 84
+and 112 of the given gems, in the order of their sets::
+
+    python benchmarks/learn_fill_correction.py --fill paper --designs 0 --extra-set train-paper-608 \\
+        --learning-curve 28,42,56,84,112,150
 """
 
 from __future__ import annotations
@@ -229,6 +237,24 @@ def choose(data: FillData) -> tuple[dict, dict]:
     return choice, scores
 
 
+def learning_curve(kind: str, designs: list, runs: list[dict], sizes: list[int]) -> None:
+    """Print the packaged correction's cross-validated TVD on the first n gems, for each n in `sizes`."""
+    packaged = fills.FillCorrection.from_json((DISCREPANCY / fills.fill_discrepancy_file(kind)).read_text())
+    linear = {"discrepancy_at": packaged.discrepancy_at, "coordinates": packaged.coordinates,
+              "penalty": packaged.penalty}  # fmt: skip
+    choices = {"linear": linear}
+    if packaged.kernel_length:
+        choices["with kernel"] = linear | {"kernel_length": packaged.kernel_length,
+                                           "kernel_penalty": packaged.kernel_penalty}  # fmt: skip
+    print(f"the packaged {kind} correction's choice ({label(choices.get('with kernel', linear))}) by {FOLDS}-fold "
+          f"CV on the first n of {len(designs)} gems")  # fmt: skip
+    print(f"{'gems':>5}" + "".join(f"  {name + ' median':>18} {'mean':>7}" for name in choices))
+    for n in sizes:
+        data = FillData(kind, designs[:n], runs[:n])
+        row = [data.cross_validate(**kw) for kw in choices.values()]
+        print(f"{n:5d}" + "".join(f"  {np.median(err):18.4f} {err.mean():7.4f}" for err in row), flush=True)
+
+
 def label(choice: dict) -> str:
     """How a choice is named in the cross-validation scores (``info["cv"]``)."""
     text = f"{choice['discrepancy_at']} {choice['coordinates']} {choice['penalty']:g}"
@@ -253,6 +279,12 @@ def main(argv=None) -> None:
                     help="also learn from the gems cached under this set name (same fill and settings, "
                          "with the bodies they were simulated with)")  # fmt: skip
     ap.add_argument("--collect-only", action="store_true", help="simulate and stop")
+    ap.add_argument(
+        "--learning-curve",
+        default=None,
+        metavar="N,N,...",
+        help="score the packaged correction's choice on the first N gems, for each N; learn nothing",
+    )
     ap.add_argument("--cache", type=Path, default=None, help="counts file (default benchmarks/results/fastmodel.json)")
     args = ap.parse_args(argv)
     if args.cache is not None:
@@ -261,6 +293,14 @@ def main(argv=None) -> None:
         bench_fastmodel.RESULTS = args.cache
     if args.designs < 0 or args.drops < 1:
         ap.error("--designs must be >= 0 and --drops >= 1")
+    sizes = None
+    if args.learning_curve is not None:
+        try:
+            sizes = [int(n) for n in args.learning_curve.split(",")]
+        except ValueError:
+            ap.error(f"--learning-curve {args.learning_curve!r}: give whole numbers separated by commas")
+        if min(sizes) < 2 * FOLDS:
+            ap.error(f"--learning-curve: every size must be at least {2 * FOLDS} gems")
 
     held_out = [s for s in HELD_OUT_SEEDS if (args.designs and args.seed == s) or
                 any(str(s) in extra.split("-") for extra in args.extra_set)]  # fmt: skip
@@ -283,6 +323,11 @@ def main(argv=None) -> None:
     # the gems this command draws (or the first extra set) must still be what the code builds; extra sets
     # are taken with the bodies they were simulated with, which the correction takes as inputs
     check_bodies(designs[:checked], runs[:checked])
+    if sizes is not None:
+        if max(sizes) > len(designs):
+            fail(f"learn_fill_correction: --learning-curve asks for {max(sizes)} gems; there are {len(designs)}")
+        learning_curve(args.fill, designs, runs, sizes)
+        return
 
     data = FillData(args.fill, designs, runs)
     sets = {}
