@@ -3,6 +3,13 @@
 Each step drops the die, adds the simulated-minus-modelled face frequencies
 to the fast model as a correction, and re-optimizes under it; the die whose
 simulated distance to the target is smallest is kept.
+
+Far from the target a few drops measure the error, near it many are needed:
+a step's drops keep the sampling noise near a seventh of the smallest
+simulated TVD so far (:func:`refinement_drops`).  The iteration is a fixed
+point that can overshoot: once a step comes out worse than the best so far,
+every later measurement of the correction is taken in at half the weight of
+the one before, the rest being the corrections measured already.
 """
 
 from __future__ import annotations
@@ -22,16 +29,48 @@ from diefab.search.optimize import optimize_design
 from diefab.search.stage import RANK_MODEL, SearchRun, Synthesis
 from diefab.stats.goodness import tvd
 
-__all__ = ["MIN_THROW_DROPS", "REFINE_DROPS", "REFINE_GOAL", "STEP_EVALUATIONS", "not_on_faces", "refine"]
+__all__ = [
+    "MIN_REFINE_DROPS",
+    "MIN_THROW_DROPS",
+    "REFINE_DROPS",
+    "REFINE_GOAL",
+    "REFINE_NOISE",
+    "RELAX",
+    "STEP_EVALUATIONS",
+    "not_on_faces",
+    "refine",
+    "refinement_drops",
+]
 
-#: Drops per simulation of a refinement step (half at the first).
+#: Most drops per simulation of a refinement step; the first step drops half of it.
 REFINE_DROPS = 16_000
+#: Fewest drops per simulation of a refinement step after the first.
+MIN_REFINE_DROPS = 2_000
+#: A step after the first drops the die REFINE_NOISE (K - 1) / d² times, with d the smallest
+#: simulated TVD so far and K the target's values: the sampling noise of the TVD stays near d / 7.
+REFINE_NOISE = 8.0
+#: Factor on the weight of each new measurement of the correction after a step that overshot.
+RELAX = 0.5
 #: Refinement stops once the simulated TVD is below this (or below the tolerance, if smaller).
 REFINE_GOAL = 0.008
 #: Model evaluations of each refinement step's re-optimization under the corrected fast model.
 STEP_EVALUATIONS = 1000
 #: Fewest drops under each of several throws in a refinement step.
 MIN_THROW_DROPS = 4_000
+
+
+def refinement_drops(best_tvd: float, values: int) -> int:
+    """Drops for a refinement step after the first, when the smallest simulated TVD so far is `best_tvd`.
+
+    A perfect die of `values` equally likely values shows a TVD of about
+    0.4 sqrt((values - 1) / n) after n drops, so REFINE_NOISE (values - 1) /
+    best_tvd² drops measure the die's error to about a seventh of `best_tvd`;
+    the count is kept within [MIN_REFINE_DROPS, REFINE_DROPS].
+    """
+    low = min(MIN_REFINE_DROPS, REFINE_DROPS)
+    if not best_tvd > 0:
+        return REFINE_DROPS
+    return int(np.clip(REFINE_NOISE * (values - 1) / best_tvd**2, low, REFINE_DROPS))
 
 
 def not_on_faces(design: Design) -> int:
@@ -68,10 +107,10 @@ def refine(
     runs = [PhysicsSettings.from_mapping(t) for t in throws] or [None]
 
     def step_drops(step: int) -> int:
-        drops = REFINE_DROPS if step else REFINE_DROPS // 2
+        drops = refinement_drops(best_tvd, len(goal)) if step else REFINE_DROPS // 2
         return max(drops // len(runs), MIN_THROW_DROPS) if len(runs) > 1 else drops
 
-    step = 0
+    step, correction, weight = 0, None, 1.0
     while True:
         drops = step_drops(step)
         if not step:  # the first step judges the model's die: within the budget, however small
@@ -97,7 +136,10 @@ def refine(
             break
         body = design.mass_properties()
         modelled = model_probabilities(RANK_MODEL, design.polyhedron, body, design.fill)
-        correction = np.array([sim.face_probabilities for sim in sims]) - modelled  # one row per throw
+        measured = np.array([sim.face_probabilities for sim in sims]) - modelled  # one row per throw
+        if not kept:  # the last move overshot
+            weight *= RELAX
+        correction = measured if correction is None else correction + weight * (measured - correction)
         try:
             result = optimize_design(design, model=RANK_MODEL, min_margin=min_margin, starts=0, seed=run.seed,
                                      name=design.name, correction=correction, deadline=run.deadline,
