@@ -239,7 +239,9 @@ def choose(data: FillData) -> tuple[dict, dict]:
 
 def learning_curve(kind: str, designs: list, runs: list[dict], sizes: list[int]) -> None:
     """Print the packaged correction's cross-validated TVD on the first n gems, for each n in `sizes`."""
-    packaged = fills.FillCorrection.from_json((DISCREPANCY / fills.fill_discrepancy_file(kind)).read_text())
+    packaged = fills.fill_discrepancy(kind)
+    if packaged is None:
+        fail(f"learn_fill_correction: no packaged {kind} correction to score")
     linear = {"discrepancy_at": packaged.discrepancy_at, "coordinates": packaged.coordinates,
               "penalty": packaged.penalty}  # fmt: skip
     choices = {"linear": linear}

@@ -63,7 +63,8 @@ def refinement_drops(best_tvd: float, values: int) -> int:
     """Drops for a refinement step after the first, when the smallest simulated TVD so far is `best_tvd`.
 
     A perfect die of `values` equally likely values shows a TVD of about
-    0.4 sqrt((values - 1) / n) after n drops, so REFINE_NOISE (values - 1) /
+    sqrt((values - 1) / (2 pi n)) after n drops
+    (:func:`diefab.stats.goodness.expected_tvd`), so REFINE_NOISE (values - 1) /
     best_tvd² drops measure the die's error to about a seventh of `best_tvd`;
     the count is kept within [MIN_REFINE_DROPS, REFINE_DROPS].
     """
