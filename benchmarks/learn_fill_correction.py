@@ -52,7 +52,9 @@ Measure the result on gems of another seed with ``bench_fastmodel.py --fill FILL
 ``--learning-curve 42,84,112`` learns nothing and writes nothing: it scores
 the packaged correction's choice (its linear part alone, then with its kernel
 term, if it has one) by the same 5-fold cross-validation on the first 42, 84
-and 112 of the given gems, in the order of their sets::
+and 112 of the given gems, in the order of their sets, then, on the largest
+n, how each held-out TVD follows the gem's d (the apex height: Pearson's r and
+where the worst tenth lie)::
 
     python benchmarks/learn_fill_correction.py --fill paper --designs 0 --extra-set train-paper-608 \\
         --learning-curve 28,42,56,84,112,150
@@ -255,6 +257,12 @@ def learning_curve(kind: str, designs: list, runs: list[dict], sizes: list[int])
         data = FillData(kind, designs[:n], runs[:n])
         row = [data.cross_validate(**kw) for kw in choices.values()]
         print(f"{n:5d}" + "".join(f"  {np.median(err):18.4f} {err.mean():7.4f}" for err in row), flush=True)
+    d = data.points[:, 3]
+    for name, err in zip(choices, row):
+        worst = np.argsort(err)[-max(1, len(err) // 10) :]
+        print(f"{name} on the {len(err)} gems: held-out TVD against d, Pearson r {np.corrcoef(d, err)[0, 1]:+.2f}; "
+              f"the worst tenth have d {d[worst].min():.2f}-{d[worst].max():.2f} (median {np.median(d[worst]):.2f}) "
+              f"of {d.min():.2f}-{d.max():.2f}")  # fmt: skip
 
 
 def label(choice: dict) -> str:
