@@ -210,6 +210,31 @@ def test_roll_app_records_every_key_in_the_log(tmp_path):
     assert resumed.counts.tolist() == tally.counts.tolist()
 
 
+def test_roll_app_shows_names_and_paths_as_they_are(tmp_path):
+    """Brackets in a design's name or the log's folder are text, not markup (an unmatched tag would crash)."""
+    pytest.importorskip("textual")
+    from diefab.cli.roll import roll_app
+
+    path = tmp_path / "run[b]" / "d6[i]-rolls.csv"
+    path.parent.mkdir()
+    repair_log(path)
+    t = parse_target("uniform:6")
+    tally = Tally(t.values, t.probabilities, 0.05)
+
+    async def drive():
+        app = roll_app(tally, path, "d6[/bold] against uniform:6", "a fair d6")
+        async with app.run_test(size=(200, 30)) as pilot:
+            await pilot.press("2")
+            await pilot.pause()
+            title = str(app.query_one("#title").render())
+            await pilot.press("q")
+        return title
+
+    title = asyncio.run(drive())
+    assert title == f"d6[/bold] against uniform:6   log: {path}"
+    assert read_log(path).values.tolist() == [2]
+
+
 def test_calibrate_reads_a_roll_log(tmp_path):
     from diefab.dice.design import load_design
     from diefab.search.calibrate import real_die

@@ -315,7 +315,7 @@ def _print_report(d, report: dict, path: Path) -> None:
     con.print(f"Eq. (2) {report['objective']:.5f}, TVD {report['tvd']:.4f} under the {report['model']} model")
     fast = report["fast"]
     if fast is not None:
-        trust = "" if fast["trusted"] else " [bold]not trusted for this die[/bold]"
+        trust = "" if fast["trusted"] else f" {BOLD}not trusted for this die{PLAIN}"
         con.print(f"fast model: TVD {fast['tvd']:.4f} to the target, {fast['tvd_to_simulation']:.4f} from the "
                   f"closing check's drops{trust}")  # fmt: skip
     if report["nearest_counted"] is not None and report["method"] == "shaped":

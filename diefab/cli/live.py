@@ -32,7 +32,7 @@ def bars(tally, width: int = BAR_WIDTH, *, keys: bool = True):
         for i in range(filled):
             bar[i] = "\u2588"
         bar[int(round(t / top * width))] = "\u2502"
-        cells = (f"[bold]{key}[/bold]",) if keys else ()
+        cells = (Text(str(key), style="bold"),) if keys else ()
         table.add_row(
             *cells, format_value(value, signed), str(int(count)), f"{o:.3f}", f"{t:.3f}",
             Text("".join(bar), style="cyan"),

@@ -70,13 +70,14 @@ def roll_app(tally, path: Path, title: str, label: str):
             self.tally, self.path, self.status = tally, path, "roll the die and press its value's key"
 
         def compose(self) -> ComposeResult:
-            yield Static(f"{title}   log: {path}", id="title")
+            yield Static(f"{title}   log: {path}", id="title", markup=False)  # names and paths are plain text
             yield Static(id="table")
-            yield Static(id="verdict")
-            yield Static(id="status")
+            yield Static(id="verdict", markup=False)
+            yield Static(id="status", markup=False)
             signed = min(tally.values) < 0
             keys = "  ".join(f"{k}={format_value(v, signed)}" for k, v in zip(tally.keys, tally.values))
-            yield Static(f"keys: {keys}   undo: {'/'.join(UNDO_KEYS)}   quit: {'/'.join(QUIT_KEYS)}", id="keys")
+            yield Static(f"keys: {keys}   undo: {'/'.join(UNDO_KEYS)}   quit: {'/'.join(QUIT_KEYS)}", id="keys",
+                         markup=False)  # fmt: skip
             yield Footer()
 
         def on_mount(self) -> None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+from html import escape
 
 from nicegui import run, ui
 
@@ -96,7 +97,7 @@ class MakePanel:
             with self.studio.client:
                 ui.run_javascript(NET_JS)
         except DiefabError as exc:
-            self.net_view.set_content(f"<p>no net: {exc}</p>")
+            self.net_view.set_content(f"<p>no net: {escape(str(exc))}</p>")
         except Exception as exc:  # a bug: one line, the server keeps running
             self.studio.show_error(f"internal error: {type(exc).__name__}: {exc}")
         finally:
