@@ -311,6 +311,19 @@ def test_read_command_logs_one_roll_per_photo_and_refuses_bad_input(tmp_path, ca
         assert capsys.readouterr().err.count("\n") == 1
 
 
+def test_a_file_no_decoder_reads_is_one_line_on_the_terminal(tmp_path, capfd):
+    """FFmpeg's own complaints (written to the process's stderr, not Python's) are kept off the terminal."""
+    from diefab.cli import main
+
+    junk = tmp_path / "junk.png"
+    junk.write_bytes(np.random.default_rng(0).integers(0, 256, 5000, dtype=np.uint8).tobytes())
+    with pytest.raises(SystemExit) as stop:
+        main(["read", "d6", "--video", str(junk), "--out", str(tmp_path / "out")])
+    assert stop.value.code == 2
+    err = capfd.readouterr().err
+    assert err.count("\n") == 1 and str(junk) in err
+
+
 def test_sticker_sheet_carries_every_marker_readable_and_true_to_scale():
     from diefab.fabricate.pdf import render_png
     from diefab.fabricate.stickers import sticker_sheets

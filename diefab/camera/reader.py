@@ -16,6 +16,7 @@ images; bad input raises :class:`~.pose.MarkerError` or
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -206,6 +207,8 @@ def frames(
         cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
     except AttributeError:
         pass
+    # nor a file FFmpeg cannot decode in FFmpeg's own lines (OpenCV reads this when it first opens a video)
+    os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
     if sum(x is not None for x in (camera, video, images)) != 1:
         raise SourceError("give exactly one source: a camera, a video file or a folder of images")
     if images is not None:
