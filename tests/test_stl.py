@@ -302,6 +302,20 @@ def test_3mf_package(gem_solid):
     assert volumes["body"] + volumes["labels"] == pytest.approx(gem_solid.report["uncut_volume_mm3"], rel=1e-6)
 
 
+@pytest.mark.parametrize("name", ['a "quoted" die', "<x>&]]><!--", "gem 'v2'"])
+def test_3mf_keeps_any_design_name_as_xml(gem_solid, name):
+    from dataclasses import replace
+
+    solid = replace(gem_solid, design=replace(gem_solid.design, name=name))
+    zf = zipfile.ZipFile(io.BytesIO(threemf_bytes(solid)))
+    root = ET.fromstring(zf.read("3D/3dmodel.model"))
+    ns = {"m": CORE_NS}
+    assert root.find(".//m:object", ns).get("name") == name
+    assert root.find("m:metadata[@name='Title']", ns).text == name
+    config = ET.fromstring(zf.read("Metadata/Slic3r_PE_model.config"))
+    assert [m.get("value") for m in config.iter("metadata") if m.get("key") == "name"][:2] == [name, f"{name} body"]
+
+
 def test_inlay_stl_fills_the_pockets(gem_solid):
     mesh = _load_stl(inlay_stl_bytes(gem_solid))
     assert mesh.is_watertight and mesh.volume == pytest.approx(gem_solid.report["engraved_volume_mm3"], rel=1e-3)

@@ -85,7 +85,7 @@ def threemf_bytes(solid: Solid) -> bytes:
     """
     from xml.sax.saxutils import escape, quoteattr
 
-    name = escape(solid.design.name)
+    name = escape(solid.design.name, {'"': "&quot;"})  # element text and attribute values alike
     parts = (
         [("body", *solid.base), ("labels", *solid.inlay)]
         if solid.inlay is not None and solid.base
