@@ -845,6 +845,9 @@ def test_bad_physics_profile_in_every_command(tmp_path, bad, monkeypatch, comman
             "resume folder afile is not a folder",
         ),
         (["stl", "fudge-gem", "--font", "/dev/zero", "--out", "out"], "font file /dev/zero is not a regular file"),
+        (["optimize", "fudge-gem", "--name", "a\nb", "--out", "out"], "'a\\nb' contains a control character"),
+        (["optimize", "fudge-gem", "--name", " ", "--out", "out"], "name is empty"),
+        (["calibrate", "--die", "d6", "1,1,1,1,1,1", "--name", "c\td"], "'c\\td' contains a control character"),
     ],
 )
 def test_messages_name_the_culprit(tmp_path, bad, monkeypatch, args, words):

@@ -16,6 +16,7 @@ from diefab.cli.common import (
     emit_json,
     get_design,
     json_option,
+    one_line_name,
     out_option,
     physics_file_option,
     refuse_options,
@@ -88,7 +89,8 @@ def _dice(die_args, realrolls):
 @click.option("--realrolls", type=click.Path(exists=True, dir_okay=False, path_type=Path), multiple=True,
               metavar="FILE",
               help="A die of the real-rolls JSON format: geometry, mass and counts (repeatable).")  # fmt: skip
-@click.option("--name", default="calibrated", show_default=True, help="Name of the run and of the profile.")
+@click.option("--name", default="calibrated", show_default=True, callback=one_line_name,
+              help="Name of the run and of the profile.")  # fmt: skip
 @click.option("--free", default=",".join(DEFAULT_FREE), show_default=True,
               metavar="A,B,...", help="Physics parameters to fit: restitution, friction, rolling_friction, "
               "spinning_friction, spin (top of the spin range), speed (top of the speed range), "

@@ -168,6 +168,19 @@ def refuse_options(ctx: click.Context, names: list[str], why: str) -> None:
             raise click.UsageError(f"{param.opts[0]} {why}", ctx=ctx)
 
 
+def one_line_name(ctx, param, value: str | None) -> str | None:
+    """Click callback: a name that a design or profile file can hold (one line, no control characters)."""
+    from diefab.core.errors import DesignError
+    from diefab.dice.schema import word
+
+    if value is not None:
+        try:
+            word("name", value)
+        except DesignError as exc:
+            raise click.BadParameter(str(exc).removeprefix("name = "), ctx=ctx, param=param) from None
+    return value
+
+
 def seed_option(help_text: str):
     """``--seed``: a non-negative integer (NumPy seeds cannot be negative)."""
     return click.option("--seed", type=click.IntRange(0, 2**63 - 1), default=0, show_default=True, help=help_text)

@@ -22,6 +22,7 @@ from diefab.cli.common import (
     get_design,
     json_option,
     note_fast_fill,
+    one_line_name,
     out_option,
     physics_file_option,
     physics_settings,
@@ -61,7 +62,8 @@ from diefab.dice.design import format_value
     help="Parameters to optimize (default: all of the family's, e.g. a,b,c,d,e for the gem).",
 )
 @click.option("--objective", type=click.Choice(["eq2", "tvd", "jsd"]), default="eq2", show_default=True)
-@click.option("--name", default=None, help="Name of the optimized design (default DESIGN-MODEL-opt).")
+@click.option("--name", default=None, callback=one_line_name,
+              help="Name of the optimized design (default DESIGN-MODEL-opt).")  # fmt: skip
 @fill_options("paper", "print")
 @simulation_options
 @click.option("--robust", is_flag=True,
