@@ -1016,6 +1016,18 @@ def test_one_shot_outputs_are_locked(tmp_path, bad):
     assert not (tmp_path / "fudge-gem-net.svg").exists()
 
 
+@pytest.mark.parametrize(("held", "name"), [("design-2d6", None), ("mine.toml", "mine")], ids=["target", "named"])
+def test_a_second_design_into_one_folder_is_refused_before_it_works(tmp_path, bad, held, name):
+    proc = _holder(tmp_path / held)
+    try:
+        line = bad("design", "2d6", "--out", tmp_path, *(["--name", name] if name else []))
+        assert f"is in use by process {proc.pid}" in line and held in line
+    finally:
+        proc.kill()
+        proc.communicate()
+    assert not list(tmp_path.glob("*.toml"))
+
+
 def _edit_spec(folder: Path, change) -> None:
     spec = json.loads((folder / "run.json").read_text())
     change(spec)

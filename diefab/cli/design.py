@@ -104,7 +104,7 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
     from dataclasses import replace
 
     from diefab.cli.common import note_profile_domain, refuse_options
-    from diefab.core.files import atomic_write, ensure_dir, output_path
+    from diefab.core.files import atomic_write, check_outputs, ensure_dir, hold_lock, output_path
     from diefab.dice.design import design_to_toml
     from diefab.dice.targets import parse_target
     from diefab.made.fill import Fill
@@ -143,6 +143,14 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
     throws = [load_profile(p, base=physics).as_dict() for p in STANDARD] if robust else []
     family = None if family_name == "auto" else family_name
     ensure_dir(out_dir)
+    # one process per design: its outputs (refused now if they cannot be written), or, before the die's family
+    # names it, its target in this folder
+    outputs = [] if report_file is None else [report_file]
+    if name is not None:
+        outputs.append(output_path(out_dir, name, ".toml"))
+    else:
+        hold_lock(Path(out_dir) / f"design-{_slug(target)}", f"design {target} into {out_dir}")
+    check_outputs(outputs)
     err = console(stderr=True)
     say = (lambda text: err.print(text, markup=False)) if not as_json else None
     with _Stages(err if not as_json else None) as stages:
