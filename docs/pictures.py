@@ -4,6 +4,8 @@ Runs the commands the docs show (``diefab net``, ``diefab stl --preview``,
 ``diefab validate --plot``) into a temporary folder and writes docs/img/.
 ``design`` draws the nets of the dice in benchmarks/results/design-dice/ (the
 design files of a ``benchmarks/bench_design.py`` run; the designing page's pictures).
+The studio's screenshots come from its browser tests:
+``DIEFAB_SHOTS=docs/img python -m pytest tests/test_studio.py``.
 """
 
 import subprocess

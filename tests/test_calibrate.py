@@ -198,6 +198,22 @@ def test_bad_counts():
             real_die("cube", load_design("d6"), counts)
 
 
+def test_a_real_die_from_a_stored_run_refuses_what_it_cannot_count():
+    """A run's stored dice go through the same checks as the command line's: one error, never a cast's warning."""
+    from diefab.dice.design import load_design
+    from diefab.search.calibrate import CalibrationError, RealDie
+
+    cube = load_design("d6")
+    for name, counts, words in (
+        ("cube", [9.3e18, 1, 1, 1, 1, 1], "more than the 1e\\+15"),
+        ("cube", ["x", 1, 1, 1, 1, 1], "must be numbers"),
+        (None, [1] * 6, "non-empty string"),
+        (3, [1] * 6, "non-empty string"),
+    ):
+        with pytest.raises(CalibrationError, match=words):
+            RealDie(name, cube, counts)
+
+
 def _quadratic(spec, centre, hessian):
     """A fake objective: total deviance (x - centre)' H (x - centre) / 2 in the unit cube, plus 10."""
 

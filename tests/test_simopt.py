@@ -30,6 +30,17 @@ def _spec(**kw) -> RunSpec:
     return RunSpec(**base)
 
 
+@pytest.mark.parametrize(("field", "value"), [("min_margin", 10**400), ("min_margin", True), ("sigma0", 10**30)])
+def test_a_stored_number_beyond_a_float_or_not_a_number_is_refused(field, value):
+    from diefab.core.errors import DesignError
+
+    with pytest.raises(DesignError, match=field):
+        _spec(**{field: value})
+    for whole in (0, 10**30):  # a whole number in JSON is read as the float it stands for
+        margin = _spec(min_margin=whole).min_margin
+        assert margin == float(whole) and isinstance(margin, float)
+
+
 def _run(spec, folder, max_evaluations, history=()):
     log = RunLog(folder)
     if not history:

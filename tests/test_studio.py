@@ -15,6 +15,7 @@ import shutil
 import socket
 import subprocess
 import sys
+import tempfile
 import time
 import urllib.request
 from dataclasses import replace
@@ -32,7 +33,9 @@ if CHROMIUM is None:
 ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
         "--disable-component-update", "--no-first-run", "--disable-sync"]  # fmt: skip
 ROOT = Path(__file__).resolve().parent.parent
-SHOTS = ROOT / "docs" / "img"
+#: Where the screenshots go: a scratch folder, or docs/img when asked (``DIEFAB_SHOTS=docs/img``), so that a
+#: test run leaves the checkout as it was.
+SHOTS = Path(os.environ.get("DIEFAB_SHOTS") or Path(tempfile.gettempdir()) / "diefab-studio-shots")
 
 
 def _free_port() -> int:

@@ -52,8 +52,15 @@ class RealDie:
     reference: Mapping[str, np.ndarray] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
+        from diefab.stats.goodness import MAX_COUNT
+
+        if not isinstance(self.name, str) or not self.name:
+            raise CalibrationError(f"die name {self.name!r} must be a non-empty string")
         k = len(self.design.support)
-        counts = np.asarray(self.counts)
+        try:
+            counts = np.asarray(self.counts, dtype=float)
+        except (TypeError, ValueError):
+            raise CalibrationError(f"die {self.name!r}: counts {self.counts!r} must be numbers") from None
         if counts.shape != (k,):
             raise CalibrationError(
                 f"die {self.name!r}: {counts.size} counts for the {k} values {self.design.support} of "
@@ -61,6 +68,9 @@ class RealDie:
             )
         if not np.all(np.isfinite(counts)) or np.any(counts < 0) or np.any(counts != np.round(counts)):
             raise CalibrationError(f"die {self.name!r}: counts {counts.tolist()} must be whole numbers >= 0")
+        if counts.sum() > MAX_COUNT:
+            raise CalibrationError(f"die {self.name!r}: {counts.sum():.3g} rolls in all is more than the "
+                                   f"{MAX_COUNT:.0e} diefab can count")  # fmt: skip
         if counts.sum() <= 0:
             raise CalibrationError(f"die {self.name!r}: no real rolls")
         object.__setattr__(self, "counts", counts.astype(np.int64))

@@ -137,10 +137,12 @@ class RunSpec:
             bad(f"most drops per evaluation {self.max_sims} must be at most {MAX_DROPS:,}")
         if self.seed < 0:
             bad(f"seed={self.seed} must be >= 0")
-        if not (math.isfinite(self.min_margin) and self.min_margin >= 0):
-            bad(f"min_margin={self.min_margin} must be a non-negative number")
-        if not (math.isfinite(self.sigma0) and 0 < self.sigma0 <= 0.5):
-            bad(f"sigma0={self.sigma0} must be in (0, 0.5]")
+        if not (is_finite_number(self.min_margin) and self.min_margin >= 0):
+            bad(f"min_margin={self.min_margin!r} must be a non-negative number")
+        if not (is_finite_number(self.sigma0) and 0 < self.sigma0 <= 0.5):
+            bad(f"sigma0={self.sigma0!r} must be in (0, 0.5]")
+        object.__setattr__(self, "min_margin", float(self.min_margin))  # a whole number in JSON is a float here
+        object.__setattr__(self, "sigma0", float(self.sigma0))
         check_budget(self, bad)
         if len(self.x0) != len(self.names) or not self.names:
             bad(f"x0 has {len(self.x0)} coordinates for parameters {self.names}")
