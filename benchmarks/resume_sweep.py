@@ -3,15 +3,16 @@
 The property test (``tests/test_resume_fuzz.py``) draws random corruptions;
 this sweep is exhaustive over a grid instead.  It makes one finished
 calibration run and one finished optimization run (two evaluations each, in
-a temporary folder), then, for every place in their ``run.json`` (each key
-and list entry, at any depth, and the whole file) and each value of
-:data:`VALUES`, writes that value there, with and without rewriting
-``identity.json`` to match (someone who edits both files), resumes the run
-in-process and records the exit status.  Any exit status other than 0 or 2,
+a temporary folder), then, for every place in their ``run.json`` and in each
+line of their log (each key and list entry, at any depth, and the whole
+document) and each value of :data:`VALUES`, writes that value there (in
+``run.json`` with and without rewriting ``identity.json`` to match, as
+someone who edits both files would), resumes the run in-process and records
+the exit status.  Any exit status other than 0 or 2,
 an "internal error" or more than one line on stderr is printed and makes the
 exit status 1::
 
-    python benchmarks/resume_sweep.py                    # both runs, about 30 seconds
+    python benchmarks/resume_sweep.py                    # both runs, about a minute
     python benchmarks/resume_sweep.py --runs calibrate
 """
 
@@ -34,6 +35,8 @@ VALUES = [
     float("nan"), float("inf"), "", "x", "5", "{x}[/bold]", "../../x", [], {}, [1, 2], [1e308], [float("nan")],
 ]  # fmt: skip
 COMMON = ["--workers", "1", "--json"]
+#: The run's log of evaluations.
+LOG = "evaluations.jsonl"
 
 
 def run(*args) -> tuple[int, str, str]:
@@ -88,31 +91,47 @@ def make_runs(root: Path) -> dict[str, tuple[Path, list[str]]]:
             "optimize": (root / "o", ["optimize", "fudge-gem", "--model", "simulation"])}  # fmt: skip
 
 
-def sweep(folder: Path, command: list[str], scratch: Path) -> tuple[Counter, list[str]]:
-    """Exit statuses over every place and value of `folder`'s run.json, and the cases that broke the promise."""
+def edits(folder: Path):
+    """(file, place, value, new text, new identity or None) for every place and value of run.json and each log line."""
     from diefab.search.runid import identity_text
 
     tree = json.loads((folder / "run.json").read_text())
-    statuses: Counter = Counter()
-    broken = []
     for place in places(tree):
         for value in VALUES:
             text = json.dumps(put(tree, place, value))
-            for resign in (False, True):
-                copy = scratch / folder.name
-                shutil.rmtree(copy, ignore_errors=True)
-                shutil.copytree(folder, copy)
-                (copy / "run.json").write_text(text)
-                if resign and isinstance(json.loads(text), dict):
-                    with contextlib.suppress(Exception):  # what has no identity keeps the old one
-                        (copy / "identity.json").write_text(identity_text(text))
-                code, _, err = run(*command, "--resume", copy, "--max-evals", "2", *COMMON)
-                statuses[code] += 1
-                lines = err.strip().splitlines()
-                if code not in (0, 2) or "internal error" in err or (code == 2 and len(lines) != 1):
-                    where = "/".join(map(str, place)) or "(root)"
-                    how = " (identity rewritten)" if resign else ""
-                    broken.append(f"{where} = {value!r}{how}: exit {code}: {lines[-1:]}")
+            yield "run.json", place, value, text, None
+            try:
+                identity = identity_text(text)
+            except Exception:  # what is no JSON object has no identity to write
+                continue
+            yield "run.json", place, value, text, identity
+    lines = (folder / LOG).read_text().splitlines()
+    for number, line in enumerate(lines):
+        record = json.loads(line)
+        for place in places(record):
+            for value in VALUES:
+                edited = [*lines[:number], json.dumps(put(record, place, value)), *lines[number + 1 :]]
+                yield LOG, (f"line {number + 1}", *place), value, "\n".join(edited) + "\n", None
+
+
+def sweep(folder: Path, command: list[str], scratch: Path) -> tuple[Counter, list[str]]:
+    """Exit statuses over every edit of :func:`edits`, and the edits that broke the promise."""
+    statuses: Counter = Counter()
+    broken = []
+    for name, place, value, text, identity in edits(folder):
+        copy = scratch / folder.name
+        shutil.rmtree(copy, ignore_errors=True)
+        shutil.copytree(folder, copy)
+        (copy / name).write_text(text)
+        if identity is not None:
+            (copy / "identity.json").write_text(identity)
+        code, _, err = run(*command, "--resume", copy, "--max-evals", "2", *COMMON)
+        statuses[name, code] += 1
+        lines = err.strip().splitlines()
+        if code not in (0, 2) or "internal error" in err or (code == 2 and len(lines) != 1):
+            where = "/".join(map(str, place)) or "(root)"
+            how = " (identity rewritten)" if identity is not None else ""
+            broken.append(f"{name}: {where} = {value!r}{how}: exit {code}: {lines[-1:]}")
     return statuses, broken
 
 
@@ -131,11 +150,11 @@ def main(argv=None) -> int:
             start = time.monotonic()
             folder, command = runs[kind]
             statuses, broken = sweep(folder, command, Path(tmp))
-            total = sum(statuses.values())
-            shares = ", ".join(f"exit {c}: {n}" for c, n in sorted(statuses.items()))
-            print(f"{kind} run: {total} resumes of an edited run.json ({len(VALUES)} values at every place, "
-                  f"identity kept or rewritten): {shares}; broken {len(broken)} ({time.monotonic() - start:.0f} s)",
-                  flush=True)  # fmt: skip
+            for name in ("run.json", LOG):
+                counts = {code: n for (file, code), n in sorted(statuses.items()) if file == name}
+                shares = ", ".join(f"exit {c}: {n:,}" for c, n in counts.items())
+                print(f"{kind} run, {name} edited: {sum(counts.values()):,} resumes ({shares})", flush=True)
+            print(f"{kind} run: broken {len(broken)} ({time.monotonic() - start:.0f} s)", flush=True)
             for line in broken:
                 print(f"  {line}")
             failed |= bool(broken)
