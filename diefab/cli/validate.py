@@ -47,6 +47,9 @@ from diefab.dice.design import format_value
               metavar="FILE",
               help="Real rolls of the die as made (a roll log or CSV, as diefab stats reads): also score the "
               "simulation against them, the physics held out on them if they took no part in fitting it.")  # fmt: skip
+@click.option("--checkpoint", type=click.Path(dir_okay=False, path_type=Path), default=None, metavar="FILE",
+              help="Keep every finished drop in FILE (.npz): the same command with the same FILE continues a "
+              "stopped validation, and with more --sims adds drops to it.")  # fmt: skip
 @click.option("--sensitivity", is_flag=True,
               help="Validate under each standard throw and table (the shipped profiles soft-tray, wooden-table, "
               "hard-tray, low-spin, high-spin) and report the TVD to the target of each and the worst.")  # fmt: skip
@@ -55,7 +58,7 @@ from diefab.dice.design import format_value
 @json_option
 @click.pass_context
 def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, report_file, target, delta, rolls_file,
-             sensitivity, physics_profile, as_json, **physics) -> None:  # fmt: skip
+             checkpoint, sensitivity, physics_profile, as_json, **physics) -> None:  # fmt: skip
     """Drop DESIGN many times in pybullet and test the counts against its target.
 
     With --sensitivity, drop it under each standard throw and table instead
@@ -87,9 +90,9 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
         real = counts_from_rolls(read_roll_column(rolls_file)[0], d.support)  # an empty log is refused there
         inputs = [*inputs, rolls_file]
     if sensitivity:
-        if plot_file is not None or report_file is not None or rolls_file is not None:
-            raise click.BadParameter("--plot, --report and --rolls go with one validation, not --sensitivity",
-                                     param_hint="--plot/--report/--rolls")  # fmt: skip
+        if plot_file is not None or report_file is not None or rolls_file is not None or checkpoint is not None:
+            raise click.BadParameter("--plot, --report, --rolls and --checkpoint go with one validation, not "
+                                     "--sensitivity", param_hint="--plot/--report/--rolls/--checkpoint")  # fmt: skip
         return _sensitivity(d, settings, sims, seed, workers, scheduler, as_json, physics)
     if plot_file is not None:
         if plot_file.suffix.lower() not in (".png", ".svg"):
@@ -99,23 +102,32 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
     if report_file is not None:
         ensure_dir(report_file.parent)
         check_outputs([report_file, *([plot_file] if plot_file else [])], inputs)
+    drops = None if checkpoint is None else _Checkpoint(checkpoint, d, settings, seed, sims, inputs)
     bar = None
     if sys.stderr.isatty():
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
         bar = Progress(TextColumn("drops"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
                        console=console(stderr=True), transient=True)  # fmt: skip
+    run = {"seed": seed, "workers": workers, "settings": settings, "scheduler": scheduler}
+    if drops is not None:
+        run.update(known=drops.known, keep=drops.keep)
     try:
         if bar is None:
-            result = simulate(d, sims, seed=seed, workers=workers, settings=settings, scheduler=scheduler)
+            result = simulate(d, sims, **run)
         else:
             with bar:
-                task = bar.add_task("drops", total=sims)
-                result = simulate(d, sims, seed=seed, workers=workers, settings=settings, scheduler=scheduler,
-                                  progress=lambda done, total: bar.update(task, completed=done))  # fmt: skip
+                task = bar.add_task("drops", total=sims, completed=0 if drops is None else drops.held)
+                result = simulate(d, sims, progress=lambda done, total: bar.update(task, completed=done), **run)
     except SimulationInterrupted as exc:
-        click.echo(f"diefab: interrupted after {exc.done} of {exc.total} drops had finished", err=True)
+        kept = ""
+        if drops is not None and exc.outcomes is not None:
+            drops.store(exc.outcomes)
+            kept = f"; they are kept in {checkpoint}: run the same command again to continue"
+        click.echo(f"diefab: interrupted after {exc.done} of {exc.total} drops had finished{kept}", err=True)
         raise click.exceptions.Exit(130) from None
+    if drops is not None:
+        drops.store(result.outcomes)
     if result.landed == 0:
         raise PhysicsError(f"no drop came to rest on a face ({result.cocked} cocked, {result.unsettled} unsettled)")
     counts = result.value_counts(d)
@@ -164,6 +176,8 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
         "sequential": seq.as_dict(),
         "verdict": said.text,
     }
+    if drops is not None:
+        out["checkpoint"] = {"file": str(checkpoint), "resumed": result.resumed}
     if real is not None:
         out["real_rolls"] = real_rolls_score(d, real, counts, rolls_file)
     if plot_file is not None:
@@ -194,6 +208,9 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
         f"{result.n} drops: {result.landed} on a face, {result.cocked} cocked, {result.unsettled} unsettled; "
         f"{result.seconds:.1f} s, {result.drops_per_second:,.0f} drops/s"
     )
+    if drops is not None:
+        before = f" ({result.resumed} of them from before)" if result.resumed else ""
+        con.print(f"drops kept in {checkpoint}{before}")
     if unexpected:
         con.print("rolled values with target weight 0: " + "  ".join(f"{k} x{c}" for k, c in unexpected.items())
                   + " (impossible under the target: p = 0)")  # fmt: skip
@@ -209,6 +226,42 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
     for written in (plot_file, report_file):
         if written is not None:
             con.print(f"wrote {written}")
+
+
+class _Checkpoint:
+    """``--checkpoint``: the drops a drop file holds for this die, and keeping new ones there as they finish."""
+
+    #: Seconds between two writes of the file while drops run (and once at the end or at a stop).
+    EVERY = 10.0
+
+    def __init__(self, path: Path, d, settings, seed: int, sims: int, inputs) -> None:
+        import time
+
+        from diefab.core.files import check_outputs, ensure_dir
+        from diefab.physics.dropfile import UNKNOWN, DropFile, drops_identity
+
+        if path.suffix.lower() != ".npz":
+            raise click.BadParameter(f"{path} must end in .npz", param_hint="--checkpoint")
+        ensure_dir(path.parent)
+        check_outputs([path], inputs)  # locked until the command ends: one process per file
+        self.file, self.identity = DropFile(path), drops_identity(d, settings, seed)
+        self.all = self.file.load(self.identity, sims, faces=len(d.polyhedron.faces))  # sims or more drops
+        self.known, self.sims = self.all[:sims], sims
+        self.held = int(np.count_nonzero(self.known != UNKNOWN))
+        self.last = time.monotonic()
+
+    def keep(self, outcomes: np.ndarray) -> None:
+        import time
+
+        if time.monotonic() - self.last >= self.EVERY:
+            self.store(outcomes)
+
+    def store(self, outcomes: np.ndarray) -> None:
+        import time
+
+        self.all[: self.sims] = outcomes
+        self.file.save(self.identity, self.all)
+        self.last = time.monotonic()
 
 
 def real_rolls_score(d, real, simulated, path) -> dict:

@@ -45,6 +45,7 @@ __all__ = [
     "ensure_dir",
     "hold_lock",
     "hold_outputs",
+    "keep_state",
     "output_path",
     "release_locks",
     "safe_name",
@@ -317,6 +318,18 @@ _release_at_exit()
 def atomic_write(path: str | Path, data: str | bytes, *, inputs: Iterable[str | Path] = ()) -> Path:
     """Write `data` to `path` through a temporary file in the same folder and a rename."""
     return write_files({path: data}, inputs=inputs)[0]
+
+
+def keep_state(path: str | Path, data: bytes) -> Path:
+    """Write the state a command continues from (a stopped validation's drops) atomically, even once stopped.
+
+    :func:`write_files` writes nothing after a stop signal, so that a stopped
+    command leaves no new outputs; the state that lets the command continue
+    is what a stop must leave, so it is written all the same (the stop signals
+    deferred while it is, and delivered after).
+    """
+    with signals_deferred():
+        return _write_files({path: data}, ())[0]
 
 
 def write_files(files: Mapping[str | Path, str | bytes], *, inputs: Iterable[str | Path] = ()) -> list[Path]:

@@ -35,6 +35,7 @@ from diefab.dice.design import Design
 from diefab.dice.drop import PhysicsSettings
 from diefab.made.fill import Fill
 from diefab.physics.cluster import dask_client, gather
+from diefab.physics.dropfile import UNKNOWN
 from diefab.physics.pool import SIGNAL_POLL, shutdown_pool, worker_pool
 
 __all__ = [
@@ -77,6 +78,8 @@ class RollResult:
         Wall-clock time of the simulation.
     settings : PhysicsSettings
     seed : int
+    resumed : int
+        Drops whose outcomes were given (``known``), not run.
     """
 
     faces: tuple[str, ...]
@@ -87,6 +90,7 @@ class RollResult:
     seconds: float
     settings: PhysicsSettings
     seed: int = 0
+    resumed: int = 0
 
     @property
     def n(self) -> int:
@@ -100,7 +104,7 @@ class RollResult:
 
     @property
     def drops_per_second(self) -> float:
-        return self.n / self.seconds if self.seconds > 0 else float("inf")
+        return (self.n - self.resumed) / self.seconds if self.seconds > 0 else float("inf")
 
     @property
     def face_probabilities(self) -> np.ndarray:
@@ -123,11 +127,15 @@ class RollResult:
 
 
 class SimulationInterrupted(KeyboardInterrupt):
-    """Ctrl-C during :func:`simulate`; `done` drops of `total` had finished."""
+    """Ctrl-C during :func:`simulate`; `done` drops of `total` had finished, their outcomes in `outcomes`.
 
-    def __init__(self, done: int, total: int) -> None:
+    `outcomes` is (total,) int32, :data:`~diefab.physics.dropfile.UNKNOWN`
+    for each drop that had not finished (None when not known).
+    """
+
+    def __init__(self, done: int, total: int, outcomes: np.ndarray | None = None) -> None:
         super().__init__(f"interrupted after {done} of {total} drops")
-        self.done, self.total = done, total
+        self.done, self.total, self.outcomes = done, total, outcomes
 
 
 # ----------------------------------------------------------------------
@@ -226,11 +234,16 @@ def drop(
 MIN_BATCH = 120
 
 
-def _batches(n: int, workers: int) -> list[tuple[int, int]]:
+def _batches(todo: np.ndarray, workers: int) -> list[tuple[int, int]]:
+    """Index ranges covering the drops of mask `todo`, run by run of consecutive drops."""
     # small enough to balance the workers and move the progress bar, big enough to keep them busy
-    size = int(np.clip(n // (workers * 16), MIN_BATCH, 512))
-    edges = np.linspace(0, n, -(-n // size) + 1).round().astype(int)  # batches of equal size
-    return [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:])]
+    size = int(np.clip(int(todo.sum()) // (workers * 16), MIN_BATCH, 512))
+    flips = np.flatnonzero(np.diff(np.concatenate([[0], todo.astype(np.int8), [0]])))
+    out = []
+    for start, stop in zip(flips[::2], flips[1::2]):
+        edges = np.linspace(start, stop, -(-(stop - start) // size) + 1).round().astype(int)  # equal sizes
+        out.extend((int(a), int(b)) for a, b in zip(edges[:-1], edges[1:]))
+    return out
 
 
 def _check_run(design: Design, n, seed, workers, settings: PhysicsSettings) -> int:
@@ -258,6 +271,8 @@ def simulate(
     settings: PhysicsSettings | None = None,
     scheduler=None,
     progress: Callable[[int, int], None] | None = None,
+    known: np.ndarray | None = None,
+    keep: Callable[[np.ndarray], None] | None = None,
 ) -> RollResult:
     """Drop `design` `n` times and count the faces it comes to rest on.
 
@@ -280,6 +295,14 @@ def simulate(
         Run the batches on this Dask cluster instead of local processes.
     progress : callable(done, total), optional
         Called as batches finish.
+    known : (n,) int array, optional
+        Outcomes of drops already run (a stopped run's, from a
+        :class:`~diefab.physics.dropfile.DropFile`), with
+        :data:`~diefab.physics.dropfile.UNKNOWN` for each drop still to run;
+        only those are run.
+    keep : callable(outcomes), optional
+        Called with the (n,) outcomes so far (``UNKNOWN`` for drops not yet
+        finished) after each batch, to keep them.
 
     Raises
     ------
@@ -303,9 +326,9 @@ def simulate(
             f"must exceed the die's radius {body.radius:.3f} so that it starts above the ground"
         )
     n, seed = int(n), int(seed)
-    outcomes = np.empty(n, dtype=np.int32)
-    batches = _batches(n, 1 if scheduler is None and workers == 1 else workers)
-    done = 0
+    outcomes = _known(known, n, len(design.polyhedron.faces))
+    batches = _batches(outcomes == UNKNOWN, 1 if scheduler is None and workers == 1 else workers)
+    resumed = done = int(np.count_nonzero(outcomes != UNKNOWN))
     started = time.perf_counter()
 
     def finished(start: int, stop: int, codes: np.ndarray) -> None:
@@ -314,6 +337,8 @@ def simulate(
         done += stop - start
         if progress is not None:
             progress(done, n)
+        if keep is not None:
+            keep(outcomes)
 
     try:
         if scheduler is not None:
@@ -355,7 +380,7 @@ def simulate(
     except KeyboardInterrupt:
         if scheduler is None and workers > 1:
             shutdown_pool(kill=True)
-        raise SimulationInterrupted(done, n) from None
+        raise SimulationInterrupted(done, n, outcomes.copy()) from None
     except BrokenProcessPool as exc:
         shutdown_pool(kill=True)
         raise PhysicsError(f"a simulation worker process died ({exc}); {done} of {n} drops had finished") from None
@@ -370,7 +395,23 @@ def simulate(
         seconds=seconds,
         settings=settings,
         seed=seed,
+        resumed=resumed,
     )
+
+
+def _known(known: np.ndarray | None, n: int, faces: int) -> np.ndarray:
+    """(n,) int32 outcomes to start from: `known`'s, or every drop still to run."""
+    from diefab.physics.world import UNSETTLED
+
+    if known is None:
+        return np.full(n, UNKNOWN, dtype=np.int32)
+    known = np.asarray(known)
+    if known.shape != (n,) or known.dtype.kind not in "iu":
+        raise PhysicsError(f"known outcomes of shape {known.shape} must be {n} integers")
+    ran = known[known != UNKNOWN]
+    if ran.size and not (ran.min() >= UNSETTLED and ran.max() < faces):
+        raise PhysicsError(f"known outcomes must be face indices below {faces}, cocked or unsettled")
+    return known.astype(np.int32)
 
 
 # ----------------------------------------------------------------------

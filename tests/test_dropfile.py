@@ -1,0 +1,108 @@
+"""A validation kept in a drop file: continued after a stop or extended, it equals one uninterrupted run."""
+
+from __future__ import annotations
+
+import io
+import json
+
+import numpy as np
+import pytest
+
+from diefab.core.errors import PhysicsError
+from diefab.dice.design import load_design
+from diefab.physics.dropfile import UNKNOWN, DropFile, drops_identity
+from diefab.physics.simulate import PhysicsSettings, simulate
+
+VALIDATE = ["validate", "d6", "--seed", "2", "--workers", "1", "--json"]
+
+
+def _counts(run, *args) -> dict:
+    code, out, err = run(*VALIDATE, *args)
+    assert code == 0, err
+    return json.loads(out)
+
+
+def test_simulate_runs_only_the_drops_not_known_and_gives_the_same_outcomes():
+    d6 = load_design("d6")
+    whole = simulate(d6, 300, seed=4, workers=1)
+    known = whole.outcomes.copy()
+    known[np.random.default_rng(0).random(300) < 0.4] = UNKNOWN
+    runs = []
+    again = simulate(d6, 300, seed=4, workers=1, known=known, keep=lambda o: runs.append(int((o == UNKNOWN).sum())))
+    assert np.array_equal(again.outcomes, whole.outcomes)
+    assert again.resumed == int((known != UNKNOWN).sum())
+    assert runs[-1] == 0 and all(a > b for a, b in zip(runs, runs[1:]))  # each batch filled in drops not known
+
+
+def test_a_validation_extended_from_its_drop_file_equals_one_run(run, tmp_path):
+    whole = _counts(run, "--sims", "400")
+    part = _counts(run, "--sims", "150", "--checkpoint", tmp_path / "d6.npz")
+    assert part["checkpoint"]["resumed"] == 0
+    more = _counts(run, "--sims", "400", "--checkpoint", tmp_path / "d6.npz")
+    assert more["checkpoint"]["resumed"] == 150
+    assert more["face_counts"] == whole["face_counts"] and more["counts"] == whole["counts"]
+    fewer = _counts(run, "--sims", "100", "--checkpoint", tmp_path / "d6.npz")  # the first 100, none run again
+    assert fewer["checkpoint"]["resumed"] == 100
+    assert sum(fewer["face_counts"].values()) + fewer["cocked"] + fewer["unsettled"] == 100
+
+
+def test_a_stopped_validation_keeps_its_finished_drops_and_continues(run, tmp_path, monkeypatch):
+    from diefab.core import stopping
+
+    whole = _counts(run, "--sims", "600")
+    calls = []
+
+    def stop_after_two_batches():
+        calls.append(1)
+        if len(calls) == 2:
+            raise stopping.Stopped
+
+    with monkeypatch.context() as m:
+        m.setattr(stopping, "check_stop", stop_after_two_batches)
+        code, _, err = run(*VALIDATE, "--sims", "600", "--checkpoint", tmp_path / "d6.npz")
+    assert code == 130 and "kept in" in err and len(err.strip().splitlines()) == 1
+    held = np.load(tmp_path / "d6.npz")["outcomes"]
+    assert 0 < int((held != UNKNOWN).sum()) < 600
+    resumed = _counts(run, "--sims", "600", "--checkpoint", tmp_path / "d6.npz")
+    assert resumed["checkpoint"]["resumed"] == int((held != UNKNOWN).sum())
+    assert resumed["face_counts"] == whole["face_counts"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["d6.npz"]  # no lock or temporary file left
+
+
+def test_a_drop_file_of_another_run_or_not_a_drop_file_is_refused_in_one_line(run, bad, tmp_path):
+    path = tmp_path / "d6.npz"
+    _counts(run, "--sims", "50", "--checkpoint", path)
+    assert "another die, fill, physics, seed" in bad(*VALIDATE, "--sims", "50", "--seed", "3", "--checkpoint", path)
+    assert "another die" in bad(*VALIDATE, "--sims", "50", "--restitution", "0.5", "--checkpoint", path)
+    assert "another die" in bad(*VALIDATE, "--sims", "50", "--fill", "print", "--checkpoint", path)
+    (tmp_path / "junk.npz").write_bytes(b"PK\x03\x04 not an archive")
+    assert "is not a diefab drop file" in bad(*VALIDATE, "--sims", "50", "--checkpoint", tmp_path / "junk.npz")
+    with open(tmp_path / "one.npz", "wb") as fh:  # one array, not an archive
+        np.save(fh, np.zeros(3))
+    assert "is not a diefab drop file" in bad(*VALIDATE, "--sims", "50", "--checkpoint", tmp_path / "one.npz")
+    assert "must end in .npz" in bad(*VALIDATE, "--sims", "50", "--checkpoint", tmp_path / "d6.json")
+    assert "not --sensitivity" in bad(*VALIDATE, "--sims", "50", "--sensitivity", "--checkpoint", path)
+
+
+@pytest.mark.parametrize(
+    ("outcomes", "words"),
+    [(np.array([0, 7]), "corrupt"), (np.array([0, -3]), "corrupt"), (np.array([[0, 1]]), "corrupt"),
+     (np.array([0.0, 1.0]), "corrupt")],
+)  # fmt: skip
+def test_a_drop_file_holding_what_no_drop_gives_is_refused(tmp_path, outcomes, words):
+    d6 = load_design("d6")
+    identity = drops_identity(d6, PhysicsSettings(), 0)
+    buffer = io.BytesIO()
+    np.savez(buffer, format=np.int64(1), identity=np.str_(identity), outcomes=outcomes)
+    (tmp_path / "x.npz").write_bytes(buffer.getvalue())
+    with pytest.raises(PhysicsError, match=words):
+        DropFile(tmp_path / "x.npz").load(identity, 2, faces=6)
+
+
+def test_the_identity_follows_what_decides_a_drop():
+    d6 = load_design("d6")
+    base = drops_identity(d6, PhysicsSettings(), 0)
+    assert base == drops_identity(load_design("d6"), PhysicsSettings(), 0)
+    assert base != drops_identity(d6, PhysicsSettings(), 1)
+    assert base != drops_identity(d6, PhysicsSettings(friction=0.5), 0)
+    assert base != drops_identity(load_design("fudge-gem"), PhysicsSettings(), 0)
