@@ -9,33 +9,24 @@ the identity, as someone who edits both files would, so that what lies behind th
 from __future__ import annotations
 
 import contextlib
-import io
 import json
 import os
 import shutil
+import sys
 from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from diefab.cli import main
 from diefab.search.runid import identity_text
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from resume_sweep import places, put  # noqa: E402 -- the places the exhaustive sweep edits, and how
+from resume_sweep import run as _run  # noqa: E402
 
 FILES = ["run.json", "identity.json", "evaluations.jsonl"]
 COMMON = ["--workers", "1", "--json"]
-
-
-def _run(*args) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        try:
-            main([str(a) for a in args])
-        except SystemExit as exc:
-            code = exc.code if isinstance(exc.code, int) else 1
-        else:  # pragma: no cover - main always exits
-            code = 0
-    return code, out.getvalue(), err.getvalue()
 
 
 @pytest.fixture(scope="module")
@@ -59,27 +50,6 @@ JSON_VALUES = st.recursive(
     lambda inner: st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=6), inner, max_size=3),
     max_leaves=6,
 )  # fmt: skip
-
-
-def _paths(node, prefix=()):
-    """Every place in a JSON tree, as a tuple of keys and indices."""
-    yield prefix
-    if isinstance(node, dict):
-        for key, value in node.items():
-            yield from _paths(value, (*prefix, key))
-    elif isinstance(node, list):
-        for i, value in enumerate(node):
-            yield from _paths(value, (*prefix, i))
-
-
-def _set(node, path, value):
-    if not path:
-        return value
-    parent = node
-    for key in path[:-1]:
-        parent = parent[key]
-    parent[path[-1]] = value
-    return node
 
 
 @st.composite
@@ -109,8 +79,8 @@ def mutations(draw):
             tree = json.loads(lines[line])
         except ValueError:
             return raw + data
-        places = list(_paths(tree))
-        lines[line] = json.dumps(_set(tree, places[(seed // 7) % len(places)], value)).encode("utf-8", "surrogatepass")
+        where = list(places(tree))
+        lines[line] = json.dumps(put(tree, where[(seed // 7) % len(where)], value)).encode("utf-8", "surrogatepass")
         return b"\n".join(lines)
 
     return name, kind, mutate, resign

@@ -184,53 +184,42 @@ def test_roll_in_a_terminal_keeps_every_roll_and_leaves_no_lock_file(tmp_path, c
     assert [p.name for p in tmp_path.iterdir()] == ["d6-rolls.csv"]  # the lock file went with the lock
 
 
-def test_roll_app_records_every_key_in_the_log(tmp_path):
+def _drive_roll_app(path, title: str, keys: tuple[str, ...], shown: str, width: int = 110):
+    """Press `keys` in ``diefab roll``'s window on a fair d6's tally logged at `path`; the tally and widget `shown`."""
     pytest.importorskip("textual")
     from diefab.cli.roll import roll_app
 
-    path = tmp_path / "d6.rolls.csv"
     repair_log(path)
     t = parse_target("uniform:6")
     tally = Tally(t.values, t.probabilities, 0.05)
 
     async def drive():
-        app = roll_app(tally, path, "d6 against uniform:6", "a fair d6")
-        async with app.run_test(size=(110, 30)) as pilot:
-            await pilot.press("6", "6", "1", "backspace", "3")
+        app = roll_app(tally, path, title, "a fair d6")
+        async with app.run_test(size=(width, 30)) as pilot:
+            await pilot.press(*keys)
             await pilot.pause()
-            verdict = str(app.query_one("#verdict").render())
+            text = str(app.query_one(shown).render())
             await pilot.press("q")
-        return verdict
+        return text
 
-    verdict = asyncio.run(drive())
+    return tally, asyncio.run(drive())
+
+
+def test_roll_app_records_every_key_in_the_log(tmp_path):
+    path = tmp_path / "d6.rolls.csv"
+    tally, verdict = _drive_roll_app(path, "d6 against uniform:6", ("6", "6", "1", "backspace", "3"), "#verdict")
     assert read_log(path).values.tolist() == [6, 6, 3]
     assert tally.counts.tolist() == [0, 0, 1, 0, 0, 2]
     assert "3 rolls" in verdict and "fair d6" in verdict
-    resumed = Tally(t.values, t.probabilities, 0.05, rolls=read_log(path).values)
+    resumed = Tally(tally.values, tally.target, 0.05, rolls=read_log(path).values)
     assert resumed.counts.tolist() == tally.counts.tolist()
 
 
 def test_roll_app_shows_names_and_paths_as_they_are(tmp_path):
     """Brackets in a design's name or the log's folder are text, not markup (an unmatched tag would crash)."""
-    pytest.importorskip("textual")
-    from diefab.cli.roll import roll_app
-
     path = tmp_path / "run[b]" / "d6[i]-rolls.csv"
     path.parent.mkdir()
-    repair_log(path)
-    t = parse_target("uniform:6")
-    tally = Tally(t.values, t.probabilities, 0.05)
-
-    async def drive():
-        app = roll_app(tally, path, "d6[/bold] against uniform:6", "a fair d6")
-        async with app.run_test(size=(200, 30)) as pilot:
-            await pilot.press("2")
-            await pilot.pause()
-            title = str(app.query_one("#title").render())
-            await pilot.press("q")
-        return title
-
-    title = asyncio.run(drive())
+    _, title = _drive_roll_app(path, "d6[/bold] against uniform:6", ("2",), "#title", width=200)
     assert title == f"d6[/bold] against uniform:6   log: {path}"
     assert read_log(path).values.tolist() == [2]
 
