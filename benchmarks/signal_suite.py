@@ -44,6 +44,7 @@ DIE = ["--die", "d6", "10,11,9,10,12,8"]
 #: The long commands, each run in a fresh output folder OUT.
 COMMANDS = {
     "validate": ["validate", "fudge-gem", "--sims", "40000", "--workers", "2"],
+    "checkpoint": ["validate", "fudge-gem", "--sims", "40000", "--workers", "2", "--checkpoint", "OUT/drops.npz"],
     "optimize": ["optimize", "fudge-gem", "--model", "simulation", "--start", "design", "--sims-per-eval", "400",
                  "--max-evals", "200", "--workers", "2", "--out", "OUT"],
     "calibrate": ["calibrate", *DIE, "--free", "restitution", "--sims-per-eval", "400", "--max-evals", "200",

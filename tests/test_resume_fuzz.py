@@ -9,10 +9,10 @@ the identity, as someone who edits both files would, so that what lies behind th
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import json
 import os
 import shutil
-import sys
 from pathlib import Path
 
 import pytest
@@ -21,9 +21,11 @@ from hypothesis import strategies as st
 
 from diefab.search.runid import identity_text
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-from resume_sweep import places, put  # noqa: E402 -- the places the exhaustive sweep edits, and how
-from resume_sweep import run as _run  # noqa: E402
+_SPEC = importlib.util.spec_from_file_location("resume_sweep", Path(__file__).parent.parent / "benchmarks" /
+                                               "resume_sweep.py")  # fmt: skip
+sweep = importlib.util.module_from_spec(_SPEC)
+_SPEC.loader.exec_module(sweep)
+places, put, _run = sweep.places, sweep.put, sweep.run  # the places the exhaustive sweep edits, and how it runs
 
 FILES = ["run.json", "identity.json", "evaluations.jsonl"]
 COMMON = ["--workers", "1", "--json"]
