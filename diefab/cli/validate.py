@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+import time
 from pathlib import Path
 
 import click
@@ -235,8 +236,6 @@ class _Checkpoint:
     EVERY = 10.0
 
     def __init__(self, path: Path, d, settings, seed: int, sims: int, inputs) -> None:
-        import time
-
         from diefab.core.files import check_outputs, ensure_dir
         from diefab.physics.dropfile import UNKNOWN, DropFile, drops_identity
 
@@ -251,14 +250,10 @@ class _Checkpoint:
         self.last = time.monotonic()
 
     def keep(self, outcomes: np.ndarray) -> None:
-        import time
-
         if time.monotonic() - self.last >= self.EVERY:
             self.store(outcomes)
 
     def store(self, outcomes: np.ndarray) -> None:
-        import time
-
         self.all[: self.sims] = outcomes
         self.file.save(self.identity, self.all)
         self.last = time.monotonic()
