@@ -106,3 +106,20 @@ def test_the_identity_follows_what_decides_a_drop():
     assert base != drops_identity(d6, PhysicsSettings(), 1)
     assert base != drops_identity(d6, PhysicsSettings(friction=0.5), 0)
     assert base != drops_identity(load_design("fudge-gem"), PhysicsSettings(), 0)
+
+
+def test_a_run_that_fails_part_way_keeps_the_drops_that_finished(run, bad, tmp_path, monkeypatch):
+    """A worker or a cluster that dies ends the run in one line; the drops finished before are kept."""
+    from diefab.physics import simulate as physics
+
+    def dies_after_some(design, n, *, known, keep, **kwargs):
+        outcomes = known.copy()
+        outcomes[:40] = 3
+        keep(outcomes)
+        raise PhysicsError("a simulation worker process died")
+
+    with monkeypatch.context() as m:
+        m.setattr(physics, "simulate", dies_after_some)
+        assert "worker process died" in bad(*VALIDATE, "--sims", "100", "--checkpoint", tmp_path / "d6.npz")
+    held = np.load(tmp_path / "d6.npz")["outcomes"]
+    assert held[:40].tolist() == [3] * 40 and np.all(held[40:] == UNKNOWN)

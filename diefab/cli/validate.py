@@ -127,6 +127,10 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
             kept = f"; they are kept in {checkpoint}: run the same command again to continue"
         click.echo(f"diefab: interrupted after {exc.done} of {exc.total} drops had finished{kept}", err=True)
         raise click.exceptions.Exit(130) from None
+    except PhysicsError:  # a worker or the cluster died: the drops that finished are kept all the same
+        if drops is not None and drops.latest is not None:
+            drops.store(drops.latest)
+        raise
     if drops is not None:
         drops.store(result.outcomes)
     if result.landed == 0:
@@ -247,9 +251,10 @@ class _Checkpoint:
         self.all = self.file.load(self.identity, sims, faces=len(d.polyhedron.faces))  # sims or more drops
         self.known, self.sims = self.all[:sims], sims
         self.held = int(np.count_nonzero(self.known != UNKNOWN))
-        self.last = time.monotonic()
+        self.last, self.latest = time.monotonic(), None
 
     def keep(self, outcomes: np.ndarray) -> None:
+        self.latest = outcomes  # the run's own array: what has finished, should the run fail
         if time.monotonic() - self.last >= self.EVERY:
             self.store(outcomes)
 
