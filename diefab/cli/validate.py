@@ -236,8 +236,9 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
 class _Checkpoint:
     """``--checkpoint``: the drops a drop file holds for this die, and keeping new ones there as they finish."""
 
-    #: Seconds between two writes of the file while drops run (and once at the end or at a stop).
-    EVERY = 10.0
+    #: Seconds between two writes of the file while drops run (and once at the end or at a stop), at least;
+    #: and at least this many times the last write's own time, so that writing takes at most a twentieth.
+    EVERY, SHARE = 10.0, 20.0
 
     def __init__(self, path: Path, d, settings, seed: int, sims: int, inputs) -> None:
         from diefab.core.files import check_outputs, ensure_dir
@@ -251,17 +252,19 @@ class _Checkpoint:
         self.all = self.file.load(self.identity, sims, faces=len(d.polyhedron.faces))  # sims or more drops
         self.known, self.sims = self.all[:sims], sims
         self.held = int(np.count_nonzero(self.known != UNKNOWN))
-        self.last, self.latest = time.monotonic(), None
+        self.last, self.latest, self.wait = time.monotonic(), None, self.EVERY
 
     def keep(self, outcomes: np.ndarray) -> None:
         self.latest = outcomes  # the run's own array: what has finished, should the run fail
-        if time.monotonic() - self.last >= self.EVERY:
+        if time.monotonic() - self.last >= self.wait:
             self.store(outcomes)
 
     def store(self, outcomes: np.ndarray) -> None:
+        start = time.monotonic()
         self.all[: self.sims] = outcomes
         self.file.save(self.identity, self.all)
         self.last = time.monotonic()
+        self.wait = max(self.EVERY, self.SHARE * (self.last - start))
 
 
 def real_rolls_score(d, real, simulated, path) -> dict:
