@@ -189,11 +189,12 @@ def test_bad_spec(cube_die, kwargs, words):
         make_spec([cube_die], **kwargs)
 
 
-def test_bad_counts():
+def test_bad_counts(tmp_path):
     from diefab.dice.design import load_design
     from diefab.search.calibrate import CalibrationError, real_die
 
-    for counts, words in (("1,2,3", "6 values"), ("1,2,3,4,5,-6", "negative"), ("0,0,0,0,0,0", "no real rolls")):
+    for counts, words in (("1,2,3", "6 values"), ("1,2,3,4,5,-6", "negative"), ("0,0,0,0,0,0", "no real rolls"),
+                          (str(tmp_path), "is not a regular file")):  # fmt: skip
         with pytest.raises(CalibrationError, match=words):
             real_die("cube", load_design("d6"), counts)
 
