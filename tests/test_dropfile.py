@@ -123,3 +123,19 @@ def test_a_run_that_fails_part_way_keeps_the_drops_that_finished(run, bad, tmp_p
         assert "worker process died" in bad(*VALIDATE, "--sims", "100", "--checkpoint", tmp_path / "d6.npz")
     held = np.load(tmp_path / "d6.npz")["outcomes"]
     assert held[:40].tolist() == [3] * 40 and np.all(held[40:] == UNKNOWN)
+
+
+def test_an_error_in_a_callback_stops_the_pooled_run_and_the_next_run_is_whole():
+    """A keep that fails (a full disk) ends the run at once: its workers are stopped, none runs on."""
+    from diefab.physics import pool
+
+    d6 = load_design("d6")
+
+    def full_disk(outcomes):
+        raise OSError("No space left on device")
+
+    with pytest.raises(OSError, match="No space"):
+        simulate(d6, 20_000, seed=6, workers=2, keep=full_disk)
+    assert pool._POOL is None  # the pool was shut down, its pending batches with it
+    again = simulate(d6, 500, seed=6, workers=2)
+    assert np.array_equal(again.outcomes, simulate(d6, 500, seed=6, workers=1).outcomes)

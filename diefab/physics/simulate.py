@@ -384,6 +384,10 @@ def simulate(
     except BrokenProcessPool as exc:
         shutdown_pool(kill=True)
         raise PhysicsError(f"a simulation worker process died ({exc}); {done} of {n} drops had finished") from None
+    except BaseException:  # a batch's own error, or a callback's (a full disk under `keep`): no batch runs on
+        if scheduler is None and workers > 1:
+            shutdown_pool(kill=True)
+        raise
     seconds = time.perf_counter() - started
     face_counts = np.bincount(outcomes[outcomes >= 0], minlength=len(design.polyhedron.faces))
     return RollResult(
