@@ -139,3 +139,18 @@ def test_an_error_in_a_callback_stops_the_pooled_run_and_the_next_run_is_whole()
     assert pool._POOL is None  # the pool was shut down, its pending batches with it
     again = simulate(d6, 500, seed=6, workers=2)
     assert np.array_equal(again.outcomes, simulate(d6, 500, seed=6, workers=1).outcomes)
+
+
+def test_a_drop_file_that_would_unpack_past_the_largest_run_is_refused_unread(tmp_path):
+    import zipfile
+
+    from diefab.physics.dropfile import MAX_BYTES
+
+    with zipfile.ZipFile(tmp_path / "bomb.npz", "w", zipfile.ZIP_DEFLATED) as archive:  # zeros pack small
+        with archive.open("outcomes.npy", "w", force_zip64=True) as member:
+            chunk = bytes(1 << 20)
+            for _ in range(MAX_BYTES // len(chunk) + 1):
+                member.write(chunk)
+    assert (tmp_path / "bomb.npz").stat().st_size < MAX_BYTES // 100
+    with pytest.raises(PhysicsError, match="unpacks to"):
+        DropFile(tmp_path / "bomb.npz").load("x", 10, faces=6)

@@ -42,7 +42,7 @@ __all__ = ["UNKNOWN", "DropFile", "drops_identity"]
 UNKNOWN = -100
 #: The file format this module writes and reads.
 FORMAT = 1
-#: Largest drop file read: four bytes per drop of the largest run, and room for the archive's headers.
+#: Largest drop file read, and most it may unpack to: four bytes per drop of the largest run, and room for headers.
 MAX_BYTES = 4 * 100_000_000 + 1_000_000
 
 
@@ -98,12 +98,20 @@ class DropFile:
         check_size(self.path, MAX_BYTES, f"drop file {self.path}", PhysicsError)
         try:
             with open(self.path, "rb") as fh:
+                with zipfile.ZipFile(fh) as members:  # what it unpacks to, before unpacking it
+                    unpacked = sum(member.file_size for member in members.infolist())
+                if unpacked > MAX_BYTES:
+                    raise PhysicsError(f"drop file {self.path} unpacks to {unpacked:,} bytes, more than the "
+                                       f"{MAX_BYTES:,} of the largest run")  # fmt: skip
+                fh.seek(0)
                 archive = np.load(fh, allow_pickle=False)
                 if not hasattr(archive, "files"):  # one array (.npy), not an archive
                     raise ValueError("not an archive")
                 with archive:
                     fmt, held_identity, held = archive["format"], archive["identity"], archive["outcomes"]
                     fmt, held_identity, held = int(fmt), str(held_identity), np.array(held)
+        except PhysicsError:
+            raise
         except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile):
             raise PhysicsError(f"drop file {self.path} is not a diefab drop file (a NumPy archive of its format, "
                                "identity and outcomes): remove it or name another") from None  # fmt: skip
