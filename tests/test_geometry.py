@@ -307,3 +307,18 @@ def test_basins_need_the_center_inside():
     cube = Polyhedron.from_points([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
     with pytest.raises(GeometryError):
         RestBasins.of(cube, np.array([3.0, 0, 0]))
+
+
+def test_hull_diameter_is_the_largest_distance_between_two_points():
+    from scipy.spatial.distance import pdist
+
+    from diefab.geometry.polyhedron import hull_diameter
+
+    rng = np.random.default_rng(5)
+    for n in (4, 50, 3000):  # 3000 points on a sphere: all on the hull, more than one block of distances
+        pts = rng.normal(size=(n, 3)) * (1.0, 2.0, 0.5)
+        if n == 3000:
+            pts /= np.linalg.norm(pts, axis=1, keepdims=True)
+        assert hull_diameter(pts) == pytest.approx(pdist(pts).max(), rel=1e-12)
+    with pytest.raises(GeometryError, match="degenerate|no volume"):
+        hull_diameter([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])

@@ -37,10 +37,52 @@ MAX_FACES = 5_000
 __all__ = [
     "Polyhedron",
     "face_margins",
+    "hull_diameter",
     "resting_faces",
     "solid_angles",
     "up_faces",
 ]
+
+
+def _hull(points) -> tuple[np.ndarray, object]:
+    """(points as floats, their scipy ``ConvexHull``), refusing what no die's hull is."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    pts = np.asarray(points, dtype=float)
+    if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) < 4:
+        raise GeometryError(f"need at least 4 points in 3D, got shape {pts.shape}")
+    if not np.all(np.isfinite(pts)):
+        raise GeometryError("points contain NaN or infinite coordinates")
+    try:
+        hull = ConvexHull(pts)
+    except QhullError as exc:
+        raise GeometryError("points are degenerate (coplanar, collinear or coincident)") from exc
+    if hull.volume <= tol.VOLUME * max(1.0, np.ptp(pts, axis=0).max() ** 3):
+        raise GeometryError("points span no volume")
+    if len(hull.simplices) > MAX_HULL_TRIANGLES:
+        raise GeometryError(f"the convex hull has {len(hull.simplices):,} triangles, more than the "
+                            f"{MAX_HULL_TRIANGLES:,} a die's hull needs: simplify the mesh")  # fmt: skip
+    return pts, hull
+
+
+def hull_diameter(points) -> float:
+    """The largest distance between two of `points`, found among their hull's vertices in bounded memory.
+
+    Refuses what :meth:`Polyhedron.from_points` refuses, before any distance.
+
+    Examples
+    --------
+    >>> from itertools import product
+    >>> round(hull_diameter(list(product((0.0, 1.0), repeat=3))) ** 2, 12)
+    3.0
+    """
+    from scipy.spatial.distance import cdist
+
+    pts, hull = _hull(points)
+    corners = pts[hull.vertices]
+    rows = max(1, 4_000_000 // len(corners))  # distances held at once: 32 MB
+    return float(np.sqrt(max(cdist(corners[i : i + rows], corners, "sqeuclidean").max()
+                             for i in range(0, len(corners), rows))))  # fmt: skip
 
 
 @dataclass(frozen=True, eq=False)
@@ -130,22 +172,7 @@ class Polyhedron:
             they make one convex polygon flat to rounding; triangles a hair
             off each other's planes stay triangles.
         """
-        from scipy.spatial import ConvexHull, QhullError
-
-        pts = np.asarray(points, dtype=float)
-        if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) < 4:
-            raise GeometryError(f"need at least 4 points in 3D, got shape {pts.shape}")
-        if not np.all(np.isfinite(pts)):
-            raise GeometryError("points contain NaN or infinite coordinates")
-        try:
-            hull = ConvexHull(pts)
-        except QhullError as exc:
-            raise GeometryError("points are degenerate (coplanar, collinear or coincident)") from exc
-        if hull.volume <= tol.VOLUME * max(1.0, np.ptp(pts, axis=0).max() ** 3):
-            raise GeometryError("points span no volume")
-        if len(hull.simplices) > MAX_HULL_TRIANGLES:
-            raise GeometryError(f"the convex hull has {len(hull.simplices):,} triangles, more than the "
-                                f"{MAX_HULL_TRIANGLES:,} a die's hull needs: simplify the mesh")  # fmt: skip
+        pts, hull = _hull(points)
         if merge_tolerance is not None and merge_tolerance > 0:
             if strict and len(hull.vertices) != len(pts):
                 missing = sorted(set(range(len(pts))) - set(hull.vertices.tolist()))

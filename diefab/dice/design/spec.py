@@ -33,7 +33,7 @@ from diefab.dice.schema import check_mapping
 from diefab.dice.targets import Target, parse_target
 from diefab.geometry.meshes import ClosedMesh
 from diefab.geometry.moments import MassProperties, stated
-from diefab.geometry.polyhedron import Polyhedron, face_margins, resting_faces
+from diefab.geometry.polyhedron import Polyhedron, face_margins, hull_diameter, resting_faces
 from diefab.made.bodies import body_properties
 from diefab.made.fill import Fill
 from diefab.made.mass import mesh_mass_properties
@@ -253,10 +253,7 @@ class Design:
                 return Polyhedron.from_points(points, strict=not mesh)
             # the tolerance is in mm, and what size_mm measures depends on the merged faces: start from the
             # largest vertex distance and merge again if the faces say the die is measured face to face
-            from scipy.spatial import ConvexHull
-            from scipy.spatial.distance import pdist
-
-            length = float(pdist(points[ConvexHull(points).vertices]).max())
+            length = hull_diameter(points)  # refuses a hull too large before any distance
             poly = Polyhedron.from_points(points, strict=not mesh, merge_tolerance=mm * length / self.size_mm)
             ref = default_length(poly)[0]
             if abs(ref - length) > 1e-6 * length:
