@@ -150,15 +150,14 @@ class Family:
 
 def default_length(poly: Polyhedron) -> tuple[float, str]:
     """Face to face when every face has a parallel opposite (the widest pair), else the largest vertex distance."""
-    from scipy.spatial.distance import pdist
-
     from diefab.core import tolerances as tol
+    from diefab.geometry.polyhedron import hull_diameter
 
     cos = poly.normals @ poly.normals.T
     opposite = np.argmin(cos, axis=1)
     if np.all(cos[np.arange(len(cos)), opposite] < -1 + tol.COPLANAR):
         return float((poly.offsets + poly.offsets[opposite]).max()), "face to face"
-    return float(pdist(poly.vertices).max()), "largest vertex-to-vertex distance"
+    return hull_diameter(poly.vertices), "largest vertex-to-vertex distance"
 
 
 def width_along(poly: Polyhedron, face: int = 0) -> float:
