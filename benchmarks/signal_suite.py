@@ -50,6 +50,7 @@ COMMANDS = {
     "calibrate": ["calibrate", *DIE, "--free", "restitution", "--sims-per-eval", "400", "--max-evals", "200",
                   "--workers", "2", "--name", "c", "--out", "OUT"],
     "design": ["design", "1,2,3,4,5,6", "--workers", "2", "--out", "OUT"],
+    "design-checkpoint": ["design", "1,2,3,4,5,6", "--workers", "2", "--out", "OUT", "--checkpoint", "OUT/drops"],
     "stl": ["stl", "fudge-gem", "--out", "OUT"],
     "net": ["net", "fudge-gem", "--out", "OUT"],
 }  # fmt: skip

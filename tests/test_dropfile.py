@@ -16,6 +16,20 @@ from diefab.physics.simulate import PhysicsSettings, simulate
 VALIDATE = ["validate", "d6", "--seed", "2", "--workers", "1", "--json"]
 
 
+def _stop_after(batches: int):
+    """A ``check_stop`` that stops the run after `batches` batches."""
+    from diefab.core import stopping
+
+    calls = []
+
+    def check_stop():
+        calls.append(1)
+        if len(calls) == batches:
+            raise stopping.Stopped
+
+    return check_stop
+
+
 def _counts(run, *args) -> dict:
     code, out, err = run(*VALIDATE, *args)
     assert code == 0, err
@@ -50,15 +64,8 @@ def test_a_stopped_validation_keeps_its_finished_drops_and_continues(run, tmp_pa
     from diefab.core import stopping
 
     whole = _counts(run, "--sims", "600")
-    calls = []
-
-    def stop_after_two_batches():
-        calls.append(1)
-        if len(calls) == 2:
-            raise stopping.Stopped
-
     with monkeypatch.context() as m:
-        m.setattr(stopping, "check_stop", stop_after_two_batches)
+        m.setattr(stopping, "check_stop", _stop_after(2))
         code, _, err = run(*VALIDATE, "--sims", "600", "--checkpoint", tmp_path / "d6.npz")
     assert code == 130 and "kept in" in err and len(err.strip().splitlines()) == 1
     held = np.load(tmp_path / "d6.npz")["outcomes"]
@@ -154,3 +161,46 @@ def test_a_drop_file_that_would_unpack_past_the_largest_run_is_refused_unread(tm
     assert (tmp_path / "bomb.npz").stat().st_size < MAX_BYTES // 100
     with pytest.raises(PhysicsError, match="unpacks to"):
         DropFile(tmp_path / "bomb.npz").load("x", 10, faces=6)
+
+
+def _search(store=None):
+    from diefab.dice.targets import parse_target
+    from diefab.search.synthesis import synthesize
+
+    return synthesize(parse_target("uniform:3"), family="cuboid", model="simulation", max_drops=1200, seed=3,
+                      workers=1, store=store)  # fmt: skip
+
+
+def test_a_stopped_search_continued_from_its_drop_store_finds_the_same_die(tmp_path, monkeypatch):
+    from diefab.core import stopping
+    from diefab.physics.dropfile import DropStore
+    from diefab.physics.simulate import SimulationInterrupted
+
+    whole = _search()
+    with monkeypatch.context() as m:
+        m.setattr(stopping, "check_stop", _stop_after(3))
+        with pytest.raises(SimulationInterrupted):
+            _search(DropStore(tmp_path))
+    kept = [np.load(p)["outcomes"] for p in tmp_path.glob("*.npz")]
+    assert kept and 0 < sum(int((k != UNKNOWN).sum()) for k in kept) < whole.drops
+    store = DropStore(tmp_path)
+    again = _search(store)
+    assert again.design.params == whole.design.params and again.steps == whole.steps and again.drops == whole.drops
+    assert 0 < store.resumed < store.drops == whole.drops
+    replay = DropStore(tmp_path)
+    assert _search(replay).design.params == whole.design.params
+    assert replay.resumed == replay.drops == whole.drops  # every drop found, none run again
+
+
+def test_design_keeps_its_closing_check_in_its_checkpoint_folder(run, bad, tmp_path):
+    args = ["design", "uniform:3", "--family", "cuboid", "--model", "solid-angle", "--validate-sims", "300",
+            "--workers", "1", "--out", tmp_path / "out", "--json", "--checkpoint", tmp_path / "drops"]  # fmt: skip
+    code, out, err = run(*args)
+    first = json.loads(out)
+    assert code in (0, 3), err
+    assert first["checkpoint"] == {"folder": str(tmp_path / "drops"), "drops": 300, "resumed": 0}
+    code, out, err = run(*args[:-5], "--out", tmp_path / "again", "--json", "--checkpoint", tmp_path / "drops")
+    second = json.loads(out)
+    assert second["checkpoint"]["resumed"] == 300 and second["validated"] == first["validated"]
+    (tmp_path / "file").write_text("")
+    assert "is a file" in bad(*args[:-1], tmp_path / "file")

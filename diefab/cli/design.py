@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import re
 import shlex
 import time
@@ -73,6 +74,10 @@ def _slug(text: str) -> str:
               help="Drops of the closing check (on a seed the search never used); 0 skips it.")  # fmt: skip
 @click.option("--workers", type=click.IntRange(1, 256), default=None, help="Worker processes (default all cores).")
 @click.option("--scheduler", default=None, metavar="ADDRESS", help="Run the drops on this Dask scheduler.")
+@click.option("--checkpoint", "checkpoint", type=click.Path(file_okay=False), default=None,
+              metavar="DIR",
+              help="Keep every drop of the search and the closing check in DIR; the same command with the same DIR "
+              "drops only what it had not, and writes the same die (without --budget).")  # fmt: skip
 @physics_file_option
 @click.option("--flat-faces", is_flag=True,
               help="Simulate the faces the die rests on flat where the engine's one hull folds them (slower; "
@@ -85,8 +90,8 @@ def _slug(text: str) -> str:
 @json_option
 @click.pass_context
 def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance, name, seed, size_mm, min_margin,
-           validate_sims, workers, scheduler, physics_profile, flat_faces, robust, out_dir, report_file, as_json,
-           fill_kind, **fill_settings) -> None:  # fmt: skip
+           validate_sims, workers, scheduler, checkpoint, physics_profile, flat_faces, robust, out_dir, report_file,
+           as_json, fill_kind, **fill_settings) -> None:  # fmt: skip
     """Design a die that rolls like TARGET (2d6, 3dF, binomial:4, uniform:3, 1:3,2:3,...).
 
     Picks a family and face count that can carry the target's values,
@@ -96,6 +101,12 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
     the die is refined and checked under that profile, which the design file
     keeps as its [physics] table; with --robust, under each standard throw
     and table at once.
+
+    With --checkpoint DIR, a search that is stopped (Ctrl-C, a signal, a
+    dead worker) keeps the drops it made in DIR, and the same command run
+    again with DIR continues it: the drops it holds are not run again, and
+    the die written is the die an uninterrupted run writes (unless --budget
+    cut a stage short).
 
     Exit status: 0 when the closing check's TVD is within --tolerance, 3 when
     it is not (the die is still written, and stderr says what limits it), 2
@@ -151,15 +162,16 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
     else:
         hold_lock(Path(out_dir) / f"design-{_slug(target)}", f"design {target} into {out_dir}")
     check_outputs(outputs)
+    store = None if checkpoint is None else _store(checkpoint)
     err = console(stderr=True)
     say = (lambda text: err.print(text, markup=False)) if not as_json else None
-    with _Stages(err if not as_json else None) as stages:
+    with _kept(checkpoint), _Stages(err if not as_json else None) as stages:
         found = synthesize(
             goal, faces=faces, family=family, fill=made, model=model,
             budget_seconds=None if budget is None else budget * 60, max_drops=max_drops, tolerance=tolerance,
             seed=seed, name=name or "die", size_mm=size_mm, min_margin=min_margin, workers=workers,
             scheduler=scheduler, progress=say, ticker=stages.tick, settings=PhysicsSettings.from_mapping(physics),
-            throws=throws,
+            throws=throws, store=store,
         )  # fmt: skip
     d = replace(
         found.design,
@@ -188,10 +200,10 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
     aligned = goal.aligned(d.support)
     validated, verdict, agreement = None, None, None
     if validate_sims:
-        with _Stages(err if not as_json else None) as stages:
+        with _kept(checkpoint), _Stages(err if not as_json else None) as stages:
             tell = lambda done, total: stages.tick("closing check", done, total)  # noqa: E731
             validated = closing_check(d, validate_sims, seed, throws=throws, workers=workers, scheduler=scheduler,
-                                      progress=tell)  # fmt: skip
+                                      progress=tell, store=store)  # fmt: skip
         agreement = fast_agreement(d, validated["probabilities"])
         verdict = judge(goal, validated, tolerance, method=found.method, nearest=found.nearest,
                         simulated_tvd=found.simulated_tvd, drops=found.drops,
@@ -244,6 +256,8 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
         "refinement": found.steps,
         "seconds": time.monotonic() - t0,
     }  # fmt: skip
+    if store is not None:
+        report["checkpoint"] = {"folder": str(checkpoint), "drops": store.drops, "resumed": store.resumed}
     if report_file is not None:
         from diefab.fabricate.report import design_report, render_report
 
@@ -253,6 +267,9 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
         emit_json(report)
     else:
         _print_report(d, report, path)
+        if store is not None:
+            console().print(f"drops kept in {checkpoint} ({store.resumed:,} of {store.drops:,} from before)",
+                            markup=False)  # fmt: skip
         if report_file is not None:
             console().print(f"wrote {report['report']}")
     if found.capped:
@@ -266,6 +283,34 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
     if validated is None:
         click.echo("diefab: note: --validate-sims 0 skips the closing check, so nothing checked the die against "
                    "--tolerance", err=True)  # fmt: skip
+
+
+@contextlib.contextmanager
+def _kept(checkpoint: str | None):
+    """On a stop with --checkpoint, say where the drops made are kept (one line, exit status 130)."""
+    try:
+        yield
+    except KeyboardInterrupt:
+        if checkpoint is None:
+            raise
+        click.echo(f"diefab: interrupted; the drops made so far are kept in {checkpoint}: run the same command "
+                   "again to continue", err=True)  # fmt: skip
+        raise click.exceptions.Exit(130) from None
+
+
+def _store(name: str):
+    """``--checkpoint``: the drop store in folder `name`, held by this process until it ends."""
+    from diefab.core.files import ensure_dir, hold_lock
+    from diefab.physics.dropfile import DropStore
+
+    if not name.strip():
+        raise click.BadParameter("name a folder", param_hint="--checkpoint")
+    folder = Path(name)
+    if folder.exists() and not folder.is_dir():
+        raise click.BadParameter(f"{folder} exists and is not a folder", param_hint="--checkpoint")
+    ensure_dir(folder)
+    hold_lock(folder, f"design checkpoint {folder}")
+    return DropStore(folder)
 
 
 class _Stages:

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import sys
-import time
 from pathlib import Path
 
 import click
@@ -103,36 +102,27 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
     if report_file is not None:
         ensure_dir(report_file.parent)
         check_outputs([report_file, *([plot_file] if plot_file else [])], inputs)
-    drops = None if checkpoint is None else _Checkpoint(checkpoint, d, settings, seed, sims, inputs)
+    drops = None if checkpoint is None else _checkpoint(checkpoint, d, settings, seed, sims, inputs)
     bar = None
     if sys.stderr.isatty():
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
         bar = Progress(TextColumn("drops"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
                        console=console(stderr=True), transient=True)  # fmt: skip
-    run = {"seed": seed, "workers": workers, "settings": settings, "scheduler": scheduler}
-    if drops is not None:
-        run.update(known=drops.known, keep=drops.keep)
+    drop = (lambda **run: simulate(d, sims, seed=seed, settings=settings, **run)) if drops is None else (
+        lambda **run: drops.run(d, **run))  # fmt: skip
     try:
         if bar is None:
-            result = simulate(d, sims, **run)
+            result = drop(workers=workers, scheduler=scheduler)
         else:
             with bar:
                 task = bar.add_task("drops", total=sims, completed=0 if drops is None else drops.held)
-                result = simulate(d, sims, progress=lambda done, total: bar.update(task, completed=done), **run)
-    except SimulationInterrupted as exc:
-        kept = ""
-        if drops is not None and exc.outcomes is not None:
-            drops.store(exc.outcomes)
-            kept = f"; they are kept in {checkpoint}: run the same command again to continue"
+                result = drop(workers=workers, scheduler=scheduler,
+                              progress=lambda done, total: bar.update(task, completed=done))  # fmt: skip
+    except SimulationInterrupted as exc:  # a checkpoint has kept the drops that finished
+        kept = "" if drops is None else f"; they are kept in {checkpoint}: run the same command again to continue"
         click.echo(f"diefab: interrupted after {exc.done} of {exc.total} drops had finished{kept}", err=True)
         raise click.exceptions.Exit(130) from None
-    except PhysicsError:  # a worker or the cluster died: the drops that finished are kept all the same
-        if drops is not None and drops.latest is not None:
-            drops.store(drops.latest)
-        raise
-    if drops is not None:
-        drops.store(result.outcomes)
     if result.landed == 0:
         raise PhysicsError(f"no drop came to rest on a face ({result.cocked} cocked, {result.unsettled} unsettled)")
     counts = result.value_counts(d)
@@ -233,38 +223,16 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
             con.print(f"wrote {written}")
 
 
-class _Checkpoint:
-    """``--checkpoint``: the drops a drop file holds for this die, and keeping new ones there as they finish."""
+def _checkpoint(path: Path, d, settings, seed: int, sims: int, inputs):
+    """``--checkpoint``: the drops the drop file at `path` holds for this die, kept there as new ones finish."""
+    from diefab.core.files import check_outputs, ensure_dir
+    from diefab.physics.dropfile import Checkpoint, DropFile
 
-    #: Seconds between two writes of the file while drops run (and once at the end or at a stop), at least;
-    #: and at least this many times the last write's own time, so that writing takes at most a twentieth.
-    EVERY, SHARE = 10.0, 20.0
-
-    def __init__(self, path: Path, d, settings, seed: int, sims: int, inputs) -> None:
-        from diefab.core.files import check_outputs, ensure_dir
-        from diefab.physics.dropfile import UNKNOWN, DropFile, drops_identity
-
-        if path.suffix.lower() != ".npz":
-            raise click.BadParameter(f"{path} must end in .npz", param_hint="--checkpoint")
-        ensure_dir(path.parent)
-        check_outputs([path], inputs)  # locked until the command ends: one process per file
-        self.file, self.identity = DropFile(path), drops_identity(d, settings, seed)
-        self.all = self.file.load(self.identity, sims, faces=len(d.polyhedron.faces))  # sims or more drops
-        self.known, self.sims = self.all[:sims], sims
-        self.held = int(np.count_nonzero(self.known != UNKNOWN))
-        self.last, self.latest, self.wait = time.monotonic(), None, self.EVERY
-
-    def keep(self, outcomes: np.ndarray) -> None:
-        self.latest = outcomes  # the run's own array: what has finished, should the run fail
-        if time.monotonic() - self.last >= self.wait:
-            self.store(outcomes)
-
-    def store(self, outcomes: np.ndarray) -> None:
-        start = time.monotonic()
-        self.all[: self.sims] = outcomes
-        self.file.save(self.identity, self.all)
-        self.last = time.monotonic()
-        self.wait = max(self.EVERY, self.SHARE * (self.last - start))
+    if path.suffix.lower() != ".npz":
+        raise click.BadParameter(f"{path} must end in .npz", param_hint="--checkpoint")
+    ensure_dir(path.parent)
+    check_outputs([path], inputs)  # locked until the command ends: one process per file
+    return Checkpoint(DropFile(path), d, settings, seed, sims)
 
 
 def real_rolls_score(d, real, simulated, path) -> dict:

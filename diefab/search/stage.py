@@ -64,6 +64,9 @@ class SearchRun:
     capped: bool = False
     #: Largest TVD of a die that rolls like its target (a tuning stops once its error is well within it).
     tolerance: float = 0.02
+    #: Where every drop is kept (a :class:`~diefab.physics.dropfile.DropStore`), so that a stopped search run
+    #: again drops only what it had not; None keeps nothing.
+    store: Any = None
 
     def note_cap(self) -> None:
         """Record that the wall-time cap has passed (the stage that just ended may have been cut)."""
@@ -79,9 +82,13 @@ class SearchRun:
 
         before = self.used
         end = min(self.max_drops if total is None else max(total, before + n), self.max_drops)
-        result = simulate(design, n, seed=seed, workers=self.workers, scheduler=self.scheduler,
-                          settings=settings if settings is not None else self.settings,
-                          progress=lambda done, _: self.tick(stage, min(before + done, end), end))  # fmt: skip
+        settings = settings if settings is not None else self.settings
+        run = {"workers": self.workers, "scheduler": self.scheduler,
+               "progress": lambda done, _: self.tick(stage, min(before + done, end), end)}  # fmt: skip
+        if self.store is None:
+            result = simulate(design, n, seed=seed, settings=settings, **run)
+        else:
+            result = self.store.run(design, settings, seed, n, **run)
         self.used += n
         self.tick(stage, min(self.used, end), end)
         return result

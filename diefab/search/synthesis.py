@@ -138,6 +138,7 @@ def synthesize(
     progress: Callable[[str], None] | None = None,
     ticker: Callable[[str, int, int], None] | None = None,
     throws: Sequence[Mapping[str, Any]] = (),
+    store=None,
 ) -> Synthesis:
     """Design a die for `target`.
 
@@ -188,6 +189,10 @@ def synthesize(
         drops the die under every one, corrects the model by each one's
         simulated-minus-modelled frequencies and minimizes the worst of the
         corrected objectives; a step is judged by its worst simulated TVD.
+    store : DropStore, optional
+        Keeps every drop (:class:`~diefab.physics.dropfile.DropStore`): the
+        same search run again with the same store drops only what it had
+        not, and finds the same die.
 
     Raises
     ------
@@ -209,7 +214,8 @@ def synthesize(
     final_model = RANK_MODEL if model == "simulation" else model
     if final_model not in MODELS:
         raise DesignError(f"model {model!r} is not available (models: {', '.join([*MODELS, 'simulation'])})")
-    run = SearchRun(seed, max_drops, deadline, workers, scheduler, settings, say, tick, tolerance=tolerance)
+    run = SearchRun(seed, max_drops, deadline, workers, scheduler, settings, say, tick, tolerance=tolerance,
+                    store=store)  # fmt: skip
     only = family if family in COUNTED_FAMILIES else None
     if family is None and faces is not None:  # a face count only a counted-only family has
         only = next((f for f, m in COUNTED_FAMILIES.items() if m == faces), None)

@@ -53,11 +53,14 @@ def closing_check(
     workers: int | None = None,
     scheduler=None,
     progress: Callable[[int, int], None] | None = None,
+    store=None,
 ) -> dict:
     """Drop `design` `sims` times on seed ``seed + CHECK_SEED_OFFSET`` and measure its fit to the target.
 
     With `throws`, under each physics setting in turn; the worst (largest
-    TVD) is returned, with every one under ``"throws"``.
+    TVD) is returned, with every one under ``"throws"``.  With `store` (a
+    :class:`~diefab.physics.dropfile.DropStore`), every drop is kept there,
+    and drops it already holds are not run again.
 
     Returns
     -------
@@ -77,8 +80,12 @@ def closing_check(
     runs = list(throws) or [design.physics]
     for i, throw in enumerate(runs):
         tell = None if progress is None else (lambda done, total, i=i: progress(i * sims + done, len(runs) * sims))
-        result = simulate(design, sims, seed=check_seed, workers=workers, scheduler=scheduler,
-                          settings=PhysicsSettings.from_mapping(throw), progress=tell)  # fmt: skip
+        settings = PhysicsSettings.from_mapping(throw)
+        run = {"workers": workers, "scheduler": scheduler, "progress": tell}
+        if store is None:
+            result = simulate(design, sims, seed=check_seed, settings=settings, **run)
+        else:
+            result = store.run(design, settings, check_seed, sims, **run)
         fit = goodness_of_fit(result.value_counts(design), aligned, seed=check_seed)
         checks.append({"n": result.n, "landed": result.landed, "seed": check_seed, "tvd": float(fit.tvd),
                        "p_value": float(fit.p_value), "expected_tvd": float(fit.expected_tvd),
