@@ -117,7 +117,7 @@ def test_the_identity_follows_what_decides_a_drop():
 
 def test_a_run_that_fails_part_way_keeps_the_drops_that_finished(run, bad, tmp_path, monkeypatch):
     """A worker or a cluster that dies ends the run in one line; the drops finished before are kept."""
-    from diefab.physics import simulate as physics
+    from diefab.physics import checkpoint as physics
 
     def dies_after_some(design, n, *, known, keep, **kwargs):
         outcomes = known.copy()
@@ -173,7 +173,7 @@ def _search(store=None):
 
 def test_a_stopped_search_continued_from_its_drop_store_finds_the_same_die(tmp_path, monkeypatch):
     from diefab.core import stopping
-    from diefab.physics.dropfile import DropStore
+    from diefab.physics.checkpoint import DropStore
     from diefab.physics.simulate import SimulationInterrupted
 
     whole = _search()

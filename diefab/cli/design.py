@@ -301,7 +301,7 @@ def _kept(checkpoint: str | None):
 def _store(name: str):
     """``--checkpoint``: the drop store in folder `name`, held by this process until it ends."""
     from diefab.core.files import ensure_dir, hold_lock
-    from diefab.physics.dropfile import DropStore
+    from diefab.physics.checkpoint import DropStore
 
     if not name.strip():
         raise click.BadParameter("name a folder", param_hint="--checkpoint")

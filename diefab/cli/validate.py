@@ -226,7 +226,8 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
 def _checkpoint(path: Path, d, settings, seed: int, sims: int, inputs):
     """``--checkpoint``: the drops the drop file at `path` holds for this die, kept there as new ones finish."""
     from diefab.core.files import check_outputs, ensure_dir
-    from diefab.physics.dropfile import Checkpoint, DropFile
+    from diefab.physics.checkpoint import Checkpoint
+    from diefab.physics.dropfile import DropFile
 
     if path.suffix.lower() != ".npz":
         raise click.BadParameter(f"{path} must end in .npz", param_hint="--checkpoint")

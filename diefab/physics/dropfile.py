@@ -10,9 +10,8 @@ identity of what made them (:func:`drops_identity`): a file made by another
 die, fill, physics, seed or engine is refused, never mixed in.
 
 The file is a NumPy ``.npz`` archive (read without pickles) with three
-arrays: ``format``, ``identity`` and ``outcomes``.  A :class:`Checkpoint`
-keeps one run's drops in a drop file as they finish; a :class:`DropStore` is
-a folder of drop files, one for each body, physics and seed a search drops.
+arrays: ``format``, ``identity`` and ``outcomes``.
+:mod:`diefab.physics.checkpoint` runs drops kept in such files.
 
 Examples
 --------
@@ -31,7 +30,6 @@ from __future__ import annotations
 import hashlib
 import io
 import json
-import time
 import zipfile
 from pathlib import Path
 
@@ -39,7 +37,7 @@ import numpy as np
 
 from diefab.core.errors import PhysicsError
 
-__all__ = ["UNKNOWN", "Checkpoint", "DropFile", "DropStore", "drops_identity"]
+__all__ = ["UNKNOWN", "DropFile", "drops_identity"]
 
 #: The outcome of a drop not yet run (the engine's own codes are a face index, -1 cocked and -2 unsettled).
 UNKNOWN = -100
@@ -142,97 +140,3 @@ class DropFile:
         np.savez_compressed(buffer, format=np.int64(FORMAT), identity=np.str_(identity),
                             outcomes=np.asarray(outcomes, dtype=np.int32))  # fmt: skip
         keep_state(self.path, buffer.getvalue())
-
-
-class Checkpoint:
-    """One run's drops kept in a drop file: those it already holds, and new ones as they finish.
-
-    :meth:`run` simulates only the drops the file does not hold and writes
-    the file while drops run (every :attr:`EVERY` seconds at least, and at
-    least :attr:`SHARE` times the last write's own time apart, so that writing
-    takes at most a twentieth of the run), at the end, and when the run is
-    stopped or a worker dies.
-    """
-
-    #: Seconds between two writes while drops run, at least.
-    EVERY = 10.0
-    #: Times the last write's own time between two writes, at least.
-    SHARE = 20.0
-
-    def __init__(self, file: DropFile, design, settings, seed: int, n: int, *, identity: str | None = None) -> None:
-        from diefab.physics.simulate import PhysicsSettings
-
-        settings = settings if settings is not None else PhysicsSettings.from_mapping(design.physics)
-        self.file, self.n, self.seed, self.settings = file, int(n), int(seed), settings
-        self.identity = identity or drops_identity(design, settings, seed)
-        self.all = file.load(self.identity, self.n, faces=len(design.polyhedron.faces))  # n or more drops
-        self.known = self.all[: self.n]
-        self.held = int(np.count_nonzero(self.known != UNKNOWN))
-        self.last, self.latest, self.wait = time.monotonic(), None, self.EVERY
-
-    def keep(self, outcomes: np.ndarray) -> None:
-        """Note the run's outcomes so far; write them if the last write is long enough ago."""
-        self.latest = outcomes  # the run's own array: what has finished, should the run fail
-        if time.monotonic() - self.last >= self.wait:
-            self.store(outcomes)
-
-    def store(self, outcomes: np.ndarray) -> None:
-        """Write `outcomes` (the run's first n drops) and whatever more drops the file held."""
-        start = time.monotonic()
-        self.all[: self.n] = outcomes
-        self.file.save(self.identity, self.all)
-        self.last = time.monotonic()
-        self.wait = max(self.EVERY, self.SHARE * (self.last - start))
-
-    def run(self, design, **options):
-        """Drop `design` n times on this checkpoint's seed and settings, keeping every drop.
-
-        `options` are the other arguments of
-        :func:`~diefab.physics.simulate.simulate` (`workers`, `scheduler`,
-        `progress`); `design` is the one this checkpoint was made for.  A stop
-        (:class:`~diefab.physics.simulate.SimulationInterrupted`) or a dead
-        worker (:class:`~diefab.core.errors.PhysicsError`) is raised after the
-        drops that finished are written.
-        """
-        from diefab.physics.simulate import SimulationInterrupted, simulate
-
-        try:
-            result = simulate(design, self.n, seed=self.seed, settings=self.settings, known=self.known, keep=self.keep,
-                              **options)  # fmt: skip
-        except SimulationInterrupted as exc:
-            if exc.outcomes is not None:
-                self.store(exc.outcomes)
-            raise
-        except PhysicsError:
-            if self.latest is not None:
-                self.store(self.latest)
-            raise
-        self.store(result.outcomes)
-        return result
-
-
-class DropStore:
-    """A folder of drop files, one for each die body, physics and seed dropped: every drop of a long search.
-
-    :meth:`run` drops a die as :meth:`Checkpoint.run` does, in the file named
-    by the run's :func:`drops_identity`, so a search run again with the same
-    folder finds the drops it made before and drops only the others;
-    :attr:`drops` and :attr:`resumed` count the drops asked for and those
-    found.
-    """
-
-    def __init__(self, folder: str | Path) -> None:
-        self.folder = Path(folder)
-        self.drops = self.resumed = 0
-
-    def run(self, design, settings, seed: int, n: int, **options):
-        """Drop `design` `n` times under `settings` on `seed`, keeping every drop, as :meth:`Checkpoint.run` does."""
-        from diefab.physics.simulate import PhysicsSettings
-
-        settings = settings if settings is not None else PhysicsSettings.from_mapping(design.physics)
-        identity = drops_identity(design, settings, seed)
-        file = DropFile(self.folder / f"{identity[:32]}.npz")
-        result = Checkpoint(file, design, settings, seed, n, identity=identity).run(design, **options)
-        self.drops += result.n
-        self.resumed += result.resumed
-        return result

@@ -64,7 +64,7 @@ class SearchRun:
     capped: bool = False
     #: Largest TVD of a die that rolls like its target (a tuning stops once its error is well within it).
     tolerance: float = 0.02
-    #: Where every drop is kept (a :class:`~diefab.physics.dropfile.DropStore`), so that a stopped search run
+    #: Where every drop is kept (a :class:`~diefab.physics.checkpoint.DropStore`), so that a stopped search run
     #: again drops only what it had not; None keeps nothing.
     store: Any = None
 

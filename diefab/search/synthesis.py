@@ -190,7 +190,7 @@ def synthesize(
         simulated-minus-modelled frequencies and minimizes the worst of the
         corrected objectives; a step is judged by its worst simulated TVD.
     store : DropStore, optional
-        Keeps every drop (:class:`~diefab.physics.dropfile.DropStore`): the
+        Keeps every drop (:class:`~diefab.physics.checkpoint.DropStore`): the
         same search run again with the same store drops only what it had
         not, and finds the same die.
 

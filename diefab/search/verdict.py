@@ -59,7 +59,7 @@ def closing_check(
 
     With `throws`, under each physics setting in turn; the worst (largest
     TVD) is returned, with every one under ``"throws"``.  With `store` (a
-    :class:`~diefab.physics.dropfile.DropStore`), every drop is kept there,
+    :class:`~diefab.physics.checkpoint.DropStore`), every drop is kept there,
     and drops it already holds are not run again.
 
     Returns
