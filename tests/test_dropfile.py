@@ -192,13 +192,20 @@ def test_a_stopped_search_continued_from_its_drop_store_finds_the_same_die(tmp_p
     assert replay.resumed == replay.drops == whole.drops  # every drop found, none run again
 
 
-def test_design_keeps_its_closing_check_in_its_checkpoint_folder(run, bad, tmp_path):
+def test_a_stopped_design_says_where_its_drops_are_and_continues_from_them(run, bad, tmp_path, monkeypatch):
+    from diefab.core import stopping
+
     args = ["design", "uniform:3", "--family", "cuboid", "--model", "solid-angle", "--validate-sims", "300",
             "--workers", "1", "--out", tmp_path / "out", "--json", "--checkpoint", tmp_path / "drops"]  # fmt: skip
+    with monkeypatch.context() as m:
+        m.setattr(stopping, "check_stop", _stop_after(2))
+        code, _, err = run(*args)
+    assert code == 130 and err.strip() == (f"diefab: interrupted; the drops made so far are kept in "
+                                           f"{tmp_path / 'drops'}: run the same command again to continue")  # fmt: skip
     code, out, err = run(*args)
     first = json.loads(out)
     assert code in (0, 3), err
-    assert first["checkpoint"] == {"folder": str(tmp_path / "drops"), "drops": 300, "resumed": 0}
+    assert first["checkpoint"]["drops"] == 300 and 0 < first["checkpoint"]["resumed"] < 300
     code, out, err = run(*args[:-5], "--out", tmp_path / "again", "--json", "--checkpoint", tmp_path / "drops")
     second = json.loads(out)
     assert second["checkpoint"]["resumed"] == 300 and second["validated"] == first["validated"]
