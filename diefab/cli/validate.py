@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import sys
 from pathlib import Path
 
@@ -109,16 +110,13 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
 
         bar = Progress(TextColumn("drops"), BarColumn(), MofNCompleteColumn(), TimeRemainingColumn(),
                        console=console(stderr=True), transient=True)  # fmt: skip
-    drop = (lambda **run: simulate(d, sims, seed=seed, settings=settings, **run)) if drops is None else (
-        lambda **run: drops.run(d, **run))  # fmt: skip
+    run = {"workers": workers, "scheduler": scheduler}
     try:
-        if bar is None:
-            result = drop(workers=workers, scheduler=scheduler)
-        else:
-            with bar:
+        with bar if bar is not None else contextlib.nullcontext():
+            if bar is not None:
                 task = bar.add_task("drops", total=sims, completed=0 if drops is None else drops.held)
-                result = drop(workers=workers, scheduler=scheduler,
-                              progress=lambda done, total: bar.update(task, completed=done))  # fmt: skip
+                run["progress"] = lambda done, total: bar.update(task, completed=done)
+            result = simulate(d, sims, seed=seed, settings=settings, **run) if drops is None else drops.run(**run)
     except SimulationInterrupted as exc:  # a checkpoint has kept the drops that finished
         kept = "" if drops is None else f"; they are kept in {checkpoint}: run the same command again to continue"
         click.echo(f"diefab: interrupted after {exc.done} of {exc.total} drops had finished{kept}", err=True)

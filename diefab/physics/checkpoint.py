@@ -38,8 +38,7 @@ class Checkpoint:
     SHARE = 20.0
 
     def __init__(self, file: DropFile, design, settings, seed: int, n: int, *, identity: str | None = None) -> None:
-        settings = settings if settings is not None else PhysicsSettings.from_mapping(design.physics)
-        self.file, self.n, self.seed, self.settings = file, int(n), int(seed), settings
+        self.file, self.design, self.settings, self.seed, self.n = file, design, settings, int(seed), int(n)
         self.identity = identity or drops_identity(design, settings, seed)
         self.all = file.load(self.identity, self.n, faces=len(design.polyhedron.faces))  # n or more drops
         self.known = self.all[: self.n]
@@ -60,19 +59,19 @@ class Checkpoint:
         self.last = time.monotonic()
         self.wait = max(self.EVERY, self.SHARE * (self.last - start))
 
-    def run(self, design, **options):
-        """Drop `design` n times on this checkpoint's seed and settings, keeping every drop.
+    def run(self, **options):
+        """Drop the design n times on this checkpoint's seed and settings, keeping every drop.
 
         `options` are the other arguments of
         :func:`~diefab.physics.simulate.simulate` (`workers`, `scheduler`,
-        `progress`); `design` is the one this checkpoint was made for.  A stop
+        `progress`).  A stop
         (:class:`~diefab.physics.simulate.SimulationInterrupted`) or a dead
         worker (:class:`~diefab.core.errors.PhysicsError`) is raised after the
         drops that finished are written.
         """
         try:
-            result = simulate(design, self.n, seed=self.seed, settings=self.settings, known=self.known, keep=self.keep,
-                              **options)  # fmt: skip
+            result = simulate(self.design, self.n, seed=self.seed, settings=self.settings, known=self.known,
+                              keep=self.keep, **options)  # fmt: skip
         except SimulationInterrupted as exc:
             if exc.outcomes is not None:
                 self.store(exc.outcomes)
@@ -89,7 +88,9 @@ class DropStore:
     """A folder of drop files, one for each die body, physics and seed dropped: every drop of a long search.
 
     :meth:`run` drops a die as :meth:`Checkpoint.run` does, in the file named
-    by the run's :func:`drops_identity`, so a search run again with the same
+    by the run's :func:`~diefab.physics.dropfile.drops_identity` (`settings`
+    None: the design's ``[physics]`` table, as for
+    :func:`~diefab.physics.simulate.simulate`), so a search run again with the same
     folder finds the drops it made before and drops only the others;
     :attr:`drops` and :attr:`resumed` count the drops asked for and those
     found.
@@ -104,7 +105,7 @@ class DropStore:
         settings = settings if settings is not None else PhysicsSettings.from_mapping(design.physics)
         identity = drops_identity(design, settings, seed)
         file = DropFile(self.folder / f"{identity[:32]}.npz")
-        result = Checkpoint(file, design, settings, seed, n, identity=identity).run(design, **options)
+        result = Checkpoint(file, design, settings, seed, n, identity=identity).run(**options)
         self.drops += result.n
         self.resumed += result.resumed
         return result
