@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import json
+import re
 
 import numpy as np
 import pytest
@@ -171,6 +172,18 @@ def _search(store=None):
                       workers=1, store=store)  # fmt: skip
 
 
+def test_a_drop_store_counts_the_drops_its_files_hold_and_nothing_else(tmp_path):
+    from diefab.physics.checkpoint import DropStore
+    from diefab.physics.world import UNSETTLED
+
+    store = DropStore(tmp_path)
+    assert store.held() == 0 and DropFile(tmp_path / "none.npz").count() == 0
+    DropFile(tmp_path / "a.npz").save("a", np.array([0, UNKNOWN, 3, UNSETTLED], dtype=np.int32))
+    DropFile(tmp_path / "b.npz").save("b", np.full(7, 2, dtype=np.int32))
+    (tmp_path / "c.npz").write_bytes(b"not a drop file")
+    assert DropFile(tmp_path / "a.npz").count() == 3 and store.held() == 10
+
+
 def test_a_stopped_search_continued_from_its_drop_store_finds_the_same_die(tmp_path, monkeypatch):
     from diefab.core import stopping
     from diefab.physics.checkpoint import DropStore
@@ -200,12 +213,13 @@ def test_a_stopped_design_says_where_its_drops_are_and_continues_from_them(run, 
     with monkeypatch.context() as m:
         m.setattr(stopping, "check_stop", _stop_after(2))
         code, _, err = run(*args)
-    assert code == 130 and err.strip() == (f"diefab: interrupted; the drops made so far are kept in "
-                                           f"{tmp_path / 'drops'}: run the same command again to continue")  # fmt: skip
+    said = re.fullmatch(rf"diefab: interrupted; (\d+) drops are kept in {re.escape(str(tmp_path / 'drops'))}: "
+                        "run the same command again to continue", err.strip())  # fmt: skip
+    assert code == 130 and said, err
     code, out, err = run(*args)
     first = json.loads(out)
     assert code in (0, 3), err
-    assert first["checkpoint"]["drops"] == 300 and 0 < first["checkpoint"]["resumed"] < 300
+    assert first["checkpoint"]["drops"] == 300 and first["checkpoint"]["resumed"] == int(said[1]) > 0
     code, out, err = run(*args[:-5], "--out", tmp_path / "again", "--json", "--checkpoint", tmp_path / "drops")
     second = json.loads(out)
     assert second["checkpoint"]["resumed"] == 300 and second["validated"] == first["validated"]

@@ -165,7 +165,7 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
     store = None if checkpoint is None else _store(checkpoint)
     err = console(stderr=True)
     say = (lambda text: err.print(text, markup=False)) if not as_json else None
-    with _kept(checkpoint), _Stages(err if not as_json else None) as stages:
+    with _kept(store), _Stages(err if not as_json else None) as stages:
         found = synthesize(
             goal, faces=faces, family=family, fill=made, model=model,
             budget_seconds=None if budget is None else budget * 60, max_drops=max_drops, tolerance=tolerance,
@@ -200,7 +200,7 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
     aligned = goal.aligned(d.support)
     validated, verdict, agreement = None, None, None
     if validate_sims:
-        with _kept(checkpoint), _Stages(err if not as_json else None) as stages:
+        with _kept(store), _Stages(err if not as_json else None) as stages:
             tell = lambda done, total: stages.tick("closing check", done, total)  # noqa: E731
             validated = closing_check(d, validate_sims, seed, throws=throws, workers=workers, scheduler=scheduler,
                                       progress=tell, store=store)  # fmt: skip
@@ -286,15 +286,17 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
 
 
 @contextlib.contextmanager
-def _kept(checkpoint: str | None):
-    """On a stop with --checkpoint, say where the drops made are kept (one line, exit status 130)."""
+def _kept(store):
+    """On a stop with --checkpoint, say how many drops are kept and where (one line, exit status 130)."""
     try:
         yield
     except KeyboardInterrupt:
-        if checkpoint is None:
+        if store is None:
             raise
-        click.echo(f"diefab: interrupted; the drops made so far are kept in {checkpoint}: run the same command "
-                   "again to continue", err=True)  # fmt: skip
+        held = store.held()
+        kept = (f"{held:,} drop{'s are' if held != 1 else ' is'} kept in {store.folder}: run the same command again "
+                "to continue") if held else f"no drop was made yet, so {store.folder} holds none"  # fmt: skip
+        click.echo(f"diefab: interrupted; {kept}", err=True)
         raise click.exceptions.Exit(130) from None
 
 

@@ -109,3 +109,13 @@ class DropStore:
         self.drops += result.n
         self.resumed += result.resumed
         return result
+
+    def held(self) -> int:
+        """The drops the folder's drop files hold now (files that are not drop files count none)."""
+        held = 0
+        for path in sorted(self.folder.glob("*.npz")):
+            try:
+                held += DropFile(path).count()
+            except PhysicsError:
+                continue
+        return held

@@ -89,11 +89,37 @@ class DropFile:
             The file is not a drop file, is corrupt, or was made by another
             die, physics, seed or engine (`identity`).
         """
-        from diefab.core.files import check_size
         from diefab.physics.world import UNSETTLED
 
         if not self.path.exists():
             return np.full(n, UNKNOWN, dtype=np.int32)
+        fmt, held_identity, held = self._read()
+        if fmt != FORMAT:
+            raise PhysicsError(f"drop file {self.path} has format {fmt}, not {FORMAT}")
+        if held_identity != identity:
+            raise PhysicsError(f"drop file {self.path} holds the drops of another die, fill, physics, seed or "
+                               "engine version: name another file for this validation")  # fmt: skip
+        if (
+            held.ndim != 1
+            or held.dtype.kind not in "iu"
+            or np.any((held != UNKNOWN) & ((held < UNSETTLED) | (held >= faces)))
+        ):
+            raise PhysicsError(f"drop file {self.path} is corrupt (its outcomes are not drop outcomes)")
+        held = held.astype(np.int32)
+        if held.size >= n:
+            return held
+        return np.concatenate([held, np.full(n - held.size, UNKNOWN, dtype=np.int32)])
+
+    def count(self) -> int:
+        """The drops the file holds (0 if there is no file), whatever die they are of."""
+        if not self.path.exists():
+            return 0
+        return int(np.count_nonzero(self._read()[2] != UNKNOWN))
+
+    def _read(self) -> tuple[int, str, np.ndarray]:
+        """The file's format, identity and outcomes, read within the size limits."""
+        from diefab.core.files import check_size
+
         if not self.path.is_file():
             raise PhysicsError(f"drop file {self.path} is not a regular file")
         check_size(self.path, MAX_BYTES, f"drop file {self.path}", PhysicsError)
@@ -110,27 +136,12 @@ class DropFile:
                     raise ValueError("not an archive")
                 with archive:
                     fmt, held_identity, held = archive["format"], archive["identity"], archive["outcomes"]
-                    fmt, held_identity, held = int(fmt), str(held_identity), np.array(held)
+                    return int(fmt), str(held_identity), np.array(held)
         except PhysicsError:
             raise
         except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile):
             raise PhysicsError(f"drop file {self.path} is not a diefab drop file (a NumPy archive of its format, "
                                "identity and outcomes): remove it or name another") from None  # fmt: skip
-        if fmt != FORMAT:
-            raise PhysicsError(f"drop file {self.path} has format {fmt}, not {FORMAT}")
-        if held_identity != identity:
-            raise PhysicsError(f"drop file {self.path} holds the drops of another die, fill, physics, seed or "
-                               "engine version: name another file for this validation")  # fmt: skip
-        if (
-            held.ndim != 1
-            or held.dtype.kind not in "iu"
-            or np.any((held != UNKNOWN) & ((held < UNSETTLED) | (held >= faces)))
-        ):
-            raise PhysicsError(f"drop file {self.path} is corrupt (its outcomes are not drop outcomes)")
-        held = held.astype(np.int32)
-        if held.size >= n:
-            return held
-        return np.concatenate([held, np.full(n - held.size, UNKNOWN, dtype=np.int32)])
 
     def save(self, identity: str, outcomes: np.ndarray) -> None:
         """Write `outcomes` (:data:`UNKNOWN` for drops not run) with `identity`, atomically, even after a stop."""
