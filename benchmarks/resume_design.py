@@ -36,10 +36,13 @@ def _defaults() -> None:
         signal.signal(signum, signal.SIG_DFL)
 
 
+def _command(args: list[str], out: Path) -> list[str]:
+    return [sys.executable, "-m", "diefab", "design", *args, "--out", str(out), "--json"]
+
+
 def _design(args: list[str], out: Path) -> tuple[dict, float]:
     start = time.monotonic()
-    done = subprocess.run([sys.executable, "-m", "diefab", "design", *args, "--out", str(out), "--json"], cwd=ROOT,
-                          capture_output=True, text=True, preexec_fn=_defaults)  # fmt: skip
+    done = subprocess.run(_command(args, out), cwd=ROOT, capture_output=True, text=True, preexec_fn=_defaults)
     if done.returncode not in (0, 3):
         sys.exit(f"resume_design: design ended with status {done.returncode}: {done.stderr.strip()[-300:]}")
     return json.loads(done.stdout), time.monotonic() - start
@@ -64,9 +67,9 @@ def main() -> None:
         kept = [*base, "--checkpoint", str(tmp / "drops")]
         stops = [(signal.SIGINT, False), (signal.SIGTERM, True), (signal.SIGHUP, True)]
         for (signum, to_group), at in zip(stops, opts.at):
-            proc = subprocess.Popen([sys.executable, "-m", "diefab", "design", *kept, "--out", str(tmp / "kept"),
-                                     "--json"], cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                                    start_new_session=True, preexec_fn=_defaults)  # fmt: skip
+            proc = subprocess.Popen(_command(kept, tmp / "kept"), cwd=ROOT, stdout=subprocess.DEVNULL,
+                                    stderr=subprocess.PIPE, text=True, start_new_session=True,
+                                    preexec_fn=_defaults)  # fmt: skip
             time.sleep(at)
             (os.killpg if to_group else os.kill)(proc.pid, signum)
             _, err = proc.communicate()

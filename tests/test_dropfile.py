@@ -219,7 +219,7 @@ def test_a_stopped_design_says_where_its_drops_are_and_continues_from_them(run, 
     code, out, err = run(*args)
     first = json.loads(out)
     assert code in (0, 3), err
-    assert first["checkpoint"]["drops"] == 300 and first["checkpoint"]["resumed"] == int(said[1]) > 0
+    assert first["checkpoint"]["drops"] == 300 and 0 < first["checkpoint"]["resumed"] == int(said[1]) < 300
     code, out, err = run(*args[:-5], "--out", tmp_path / "again", "--json", "--checkpoint", tmp_path / "drops")
     second = json.loads(out)
     assert second["checkpoint"]["resumed"] == 300 and second["validated"] == first["validated"]
