@@ -68,7 +68,8 @@ choice.  Rules, none of which sees the die it scores:
   (:func:`diefab.search.crossval.nested_choices`, inner loss the TVD on
   their own drops): the held-out score of choosing, too.
 
-Then the goal's checks on each set with the source's own columns.  With
+Then the goal's checks on each set with the source's own columns, and on
+every die together when there is more than one set.  With
 ``--score-drops N``, ``hier`` and ``nested`` are scored once more on N
 fresh drops of each die (seed ``--score-seed``) at the candidates they
 chose, beside the default: the choices stand, and the simulation's own
@@ -285,16 +286,23 @@ def main() -> int:
             chosen = [chosen_label(weights[name][i], cands) for i in rows]
             print(f"  {name:<11} chosen per die: " + ", ".join(f"{dice[i].name} {c}" for i, c in zip(rows, chosen)))
         print("  nested      method per die: " + ", ".join(f"{dice[i].name} {choices[i][0]}" for i in rows))
-    for heading, rows in zip(groups, sets):
-        if any("ours" in dice[i].reference for i in rows):  # the sets with the source's own columns
-            print(f"\ngoal checks on {heading}:")
-            for name in weights:
-                goal([dice[i] for i in rows], [columns[name][i] for i in rows],
-                     [columns[label(*cands[default])][i] for i in rows], [noise[i] for i in rows], name)  # fmt: skip
+    for heading, rows in goal_sets(dice, groups, sets):
+        print(f"\ngoal checks on {heading}:")
+        for name in weights:
+            goal([dice[i] for i in rows], [columns[name][i] for i in rows],
+                 [columns[label(*cands[default])][i] for i in rows], [noise[i] for i in rows], name)  # fmt: skip
     if args.score_drops:
         fresh_scores(dice, groups, sets, cands, weights, default, noise, sims, args, started)
     print(f"\n({time.perf_counter() - started:.0f} s)")
     return 0
+
+
+def goal_sets(dice, groups, sets) -> list[tuple[str, list[int]]]:
+    """The sets the goal is checked on: each with the source's own columns, and every die when there are several."""
+    checked = [(h, rows) for h, rows in zip(groups, sets) if any("ours" in dice[i].reference for i in rows)]
+    if sum(1 for rows in sets if rows) > 1:  # the goal is stated over every die with real rolls
+        checked.append((f"every die of the run ({len(dice)})", list(range(len(dice)))))
+    return checked
 
 
 def candidate_settings(cand: tuple[float, float, float], flat_faces: bool) -> PhysicsSettings:
@@ -341,10 +349,11 @@ def fresh_scores(dice, groups, sets, cands, weights, default, noise, sims, args,
         for name, col in columns.items():
             m = np.mean([col[i] for i in rows])
             print(f"  {name:<11} mean {m:.4f} = {m / mean_noise:.2f}x the noise")
-        if any("ours" in dice[i].reference for i in rows):
-            for r in rules:
-                goal([dice[i] for i in rows], [columns[r][i] for i in rows],
-                     [columns[label(*cands[default])][i] for i in rows], [noise[i] for i in rows], r)  # fmt: skip
+    for heading, rows in goal_sets(dice, groups, sets):
+        print(f"\ngoal checks on {heading}, on the fresh drops:")
+        for r in rules:
+            goal([dice[i] for i in rows], [columns[r][i] for i in rows],
+                 [columns[label(*cands[default])][i] for i in rows], [noise[i] for i in rows], r)  # fmt: skip
 
 
 def each_candidate(dice, groups, sets, cands, freq) -> None:
