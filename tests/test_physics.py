@@ -240,6 +240,23 @@ def test_dask_local_cluster_gives_the_same_counts(gem):
     assert np.array_equal(local.outcomes, remote.outcomes)
 
 
+@pytest.mark.parametrize(("text", "seconds"), [("", 30.0), ("5", 5.0), (" 120.5 ", 120.5)])
+def test_the_wait_for_a_worker_reads_its_environment_variable(monkeypatch, text, seconds):
+    from diefab.physics.cluster import stall_limit
+
+    monkeypatch.setenv("DIEFAB_DASK_STALL", text)
+    assert stall_limit() == seconds
+
+
+@pytest.mark.parametrize("text", ["0", "-3", "nan", "inf", "soon"])
+def test_a_bad_wait_for_a_worker_is_refused_by_name(monkeypatch, text):
+    from diefab.physics.cluster import stall_limit
+
+    monkeypatch.setenv("DIEFAB_DASK_STALL", text)
+    with pytest.raises(PhysicsError, match="DIEFAB_DASK_STALL"):
+        stall_limit()
+
+
 def test_roll_result_values(gem):
     result = simulate(gem, 48, seed=0, workers=1)
     assert isinstance(result, RollResult)

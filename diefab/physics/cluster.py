@@ -7,12 +7,14 @@ A lost scheduler or a cluster left without workers ends the run in one
 from __future__ import annotations
 
 import logging
+import math
+import os
 import time
 
 from diefab.core.errors import PhysicsError
 from diefab.physics.pool import SIGNAL_POLL
 
-__all__ = ["DASK_STALL", "dask_client", "gather"]
+__all__ = ["DASK_STALL", "dask_client", "gather", "stall_limit"]
 
 
 def dask_client(scheduler, timeout: float = 3.0):
@@ -22,8 +24,11 @@ def dask_client(scheduler, timeout: float = 3.0):
     An address where no Dask scheduler answers fails within about `timeout`
     seconds (twice that at worst) with a :class:`PhysicsError`: nothing
     listening, a server that stays silent, or one that sends something else.
+    A bad ``DIEFAB_DASK_STALL`` fails here too, before anything is dropped.
     """
     from diefab.core.extras import require
+
+    stall_limit()
 
     Client = require("distributed", "dask", "--scheduler").Client
     # a lost cluster is reported by the caller as one PhysicsError, not by the client's own log lines
@@ -99,19 +104,37 @@ def _probe_scheduler(address: str, timeout: float) -> None:
         fail(f"{exc.strerror or exc}")
 
 
-#: Seconds a Dask run may go without a worker or without its scheduler before it fails.
+#: Seconds a Dask run may go without a worker before it fails, unless ``DIEFAB_DASK_STALL`` says otherwise.
 DASK_STALL = 30.0
+
+
+def stall_limit() -> float:
+    """Seconds a run waits for a worker to join: ``DIEFAB_DASK_STALL`` if set, else :data:`DASK_STALL`.
+
+    An adaptive cluster that takes minutes to start a worker needs a longer wait than a fixed one.
+    """
+    text = os.environ.get("DIEFAB_DASK_STALL", "").strip()
+    if not text:
+        return DASK_STALL
+    try:
+        seconds = float(text)
+    except ValueError:
+        seconds = math.nan
+    if not 0 < seconds < math.inf:
+        raise PhysicsError(f"DIEFAB_DASK_STALL must be a positive number of seconds, not {text!r}")
+    return seconds
 
 
 def gather(client, futures, on_result, check_stop) -> None:
     """Hand each finished future to `on_result`; fail in one line if the cluster cannot finish.
 
     A run whose scheduler is gone, or whose cluster has had no worker for
-    :data:`DASK_STALL` seconds, raises :class:`PhysicsError` instead of
+    :func:`stall_limit` seconds, raises :class:`PhysicsError` instead of
     waiting forever (Dask itself would wait for a worker to come back).
     """
     from distributed import wait
 
+    stall = stall_limit()
     pending = set(futures)
     lonely = None  # since when the cluster has had no worker
     while pending:
@@ -145,6 +168,6 @@ def gather(client, futures, on_result, check_stop) -> None:
             lonely = None
         elif lonely is None:
             lonely = time.monotonic()
-        elif time.monotonic() - lonely > DASK_STALL:
-            raise PhysicsError(f"the Dask cluster has had no worker for {DASK_STALL:g} s; start workers and run "
+        elif time.monotonic() - lonely > stall:
+            raise PhysicsError(f"the Dask cluster has had no worker for {stall:g} s; start workers and run "
                                "again")  # fmt: skip
