@@ -121,6 +121,16 @@ def test_quoted_figures_are_checked():
         check_quoted(["validated: 10000 drops, TVD 0.0119"], "validated: 10000 drops, TVD 0.0519", simulated=True)
 
 
+def test_every_environment_variable_the_package_reads_is_documented():
+    """A ``DIEFAB_*`` variable read anywhere in the package has its row in the command-line reference."""
+    read = {m for path in (ROOT / "diefab").rglob("*.py")
+            for m in re.findall(r"\b(DIEFAB_[A-Z_]+)\b", path.read_text(encoding="utf-8"))}  # fmt: skip
+    documented = set(re.findall(r"^\| `(DIEFAB_[A-Z_]+)` \|", (ROOT / "docs" / "reference" / "cli.md").read_text(
+        encoding="utf-8"), flags=re.MULTILINE))  # fmt: skip
+    assert {"DIEFAB_DASK_STALL", "DIEFAB_DEBUG"} <= read
+    assert read <= documented, sorted(read - documented)
+
+
 def test_the_site_builds_strictly(tmp_path):
     pytest.importorskip("mkdocs")
     pytest.importorskip("material")
