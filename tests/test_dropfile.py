@@ -172,16 +172,20 @@ def _search(store=None):
                       workers=1, store=store)  # fmt: skip
 
 
-def test_a_drop_store_counts_the_drops_its_files_hold_and_nothing_else(tmp_path):
+def test_a_drop_store_counts_the_drops_of_its_own_files_and_nothing_else(tmp_path):
     from diefab.physics.checkpoint import DropStore
     from diefab.physics.world import UNSETTLED
 
     store = DropStore(tmp_path)
     assert store.held() == 0 and DropFile(tmp_path / "none.npz").count() == 0
-    DropFile(tmp_path / "a.npz").save("a", np.array([0, UNKNOWN, 3, UNSETTLED], dtype=np.int32))
-    DropFile(tmp_path / "b.npz").save("b", np.full(7, 2, dtype=np.int32))
+    DropFile(tmp_path / "a.npz").save("a", np.array([0, UNKNOWN, 3, UNSETTLED], dtype=np.int32))  # another run's
     (tmp_path / "c.npz").write_bytes(b"not a drop file")
-    assert DropFile(tmp_path / "a.npz").count() == 3 and store.held() == 10
+    assert DropFile(tmp_path / "a.npz").count() == 3 and store.held() == 0
+    store.run(load_design("d6"), None, seed=5, n=12, workers=1)
+    assert store.held() == store.drops == 12 and len(list(tmp_path.glob("*.npz"))) == 3
+    again = DropStore(tmp_path)
+    again.run(load_design("d6"), None, seed=5, n=20, workers=1)
+    assert again.held() == again.drops == 20 and again.resumed == 12
 
 
 def test_a_stopped_search_continued_from_its_drop_store_finds_the_same_die(tmp_path, monkeypatch):
@@ -210,6 +214,8 @@ def test_a_stopped_design_says_where_its_drops_are_and_continues_from_them(run, 
 
     args = ["design", "uniform:3", "--family", "cuboid", "--model", "solid-angle", "--validate-sims", "300",
             "--workers", "1", "--out", tmp_path / "out", "--json", "--checkpoint", tmp_path / "drops"]  # fmt: skip
+    (tmp_path / "drops").mkdir()
+    DropFile(tmp_path / "drops" / "other.npz").save("another target's", np.zeros(50, dtype=np.int32))
     with monkeypatch.context() as m:
         m.setattr(stopping, "check_stop", _stop_after(2))
         code, _, err = run(*args)

@@ -93,27 +93,34 @@ class DropStore:
     :func:`~diefab.physics.simulate.simulate`), so a search run again with the same
     folder finds the drops it made before and drops only the others;
     :attr:`drops` and :attr:`resumed` count the drops asked for and those
-    found.
+    found.  Other runs (another target's search, say) may share the folder:
+    their files are left alone and :meth:`held` does not count them.
     """
 
     def __init__(self, folder: str | Path) -> None:
         self.folder = Path(folder)
         self.drops = self.resumed = 0
+        self.files: dict[Path, None] = {}  # the drop files this store ran, in order
 
     def run(self, design, settings, seed: int, n: int, **options):
         """Drop `design` `n` times under `settings` on `seed`, keeping every drop, as :meth:`Checkpoint.run` does."""
         settings = settings if settings is not None else PhysicsSettings.from_mapping(design.physics)
         identity = drops_identity(design, settings, seed)
-        file = DropFile(self.folder / f"{identity[:32]}.npz")
+        path = self.folder / f"{identity[:32]}.npz"
+        self.files[path] = None
+        file = DropFile(path)
         result = Checkpoint(file, design, settings, seed, n, identity=identity).run(**options)
         self.drops += result.n
         self.resumed += result.resumed
         return result
 
     def held(self) -> int:
-        """The drops the folder's drop files hold now (files that are not drop files count none)."""
+        """The drops held now by the files this store ran: those the same search run again finds.
+
+        A file that is missing or not a drop file counts none.
+        """
         held = 0
-        for path in sorted(self.folder.glob("*.npz")):
+        for path in self.files:
             try:
                 held += DropFile(path).count()
             except PhysicsError:
