@@ -22,7 +22,7 @@ short still window (``--energy-fraction 0``: still on a resting face for
 The paper's die as made (a paper model of its final gem, 405 real rolls,
 Table 2) is the first row of every table; ``--guard`` adds the published
 dice shipped with diefab (:mod:`diefab.search.published`): the source's
-further printed dice and 15 steel square cuboids.
+further printed dice, 15 steel square cuboids and two thick coins.
 
 With ``--guard`` it computes, in this process, the figures the real-dice
 guard test (``tests/test_realrolls_guard.py``) checks: each landing model's
@@ -60,6 +60,7 @@ from diefab.physics.realrolls import RealRolls, load_real_rolls
 from diefab.search.fidelity import (
     LANDING_MODELS,
     PAPER_DIE_TOML,
+    SETTLED,
     TABLE_2,
     SimulationCache,
     guard_scores,
@@ -67,6 +68,7 @@ from diefab.search.fidelity import (
     load_real_dice,
     mean_scores,
     noise_tvd,
+    settled_share,
     simulation_key,
 )
 from diefab.search.published import printed_dice
@@ -204,13 +206,21 @@ def compare_landing(files: list[Path], args) -> None:
     )
 
 
+def _cell(tvd: float) -> str:
+    """A TVD for the guard's table, or "unsettled" where the simulation does not score the die."""
+    return f"{'unsettled':>13}" if np.isnan(tvd) else f"{tvd:>13.4f}"
+
+
 def die_sets(dice) -> dict[str, list]:
-    """The dice with real rolls by set: the paper's die and the shared dice, the source's further dice, the cuboids."""
+    """The dice with real rolls by set: the paper's die and the shared dice, the source's further dice, the cuboids,
+    the thick coins."""
     printed = {d.name for d in printed_dice()}
-    return {"the paper's die and the shared dice": [d for d in dice if not d.name.startswith("cuboid-")
+    published = ("cuboid-", "coin-")
+    return {"the paper's die and the shared dice": [d for d in dice if not d.name.startswith(published)
                                                     and d.name not in printed],
             "the source's further printed dice": [d for d in dice if d.name in printed],
-            "the published cuboids": [d for d in dice if d.name.startswith("cuboid-")]}  # fmt: skip
+            "the published cuboids": [d for d in dice if d.name.startswith("cuboid-")],
+            "the thick coins": [d for d in dice if d.name.startswith("coin-")]}  # fmt: skip
 
 
 def correction_domain(args) -> None:
@@ -268,13 +278,20 @@ def guard(args) -> None:
     columns = [*MODELS, "validate", *(f"validate --profile {p}" for p in profiles)]
     print(f"{'die':<13} {'rolls':>5} {'noise':>8} " + " ".join(f"{c.split()[-1]:>13}" for c in columns))
     for d in dice:
-        print(f"{d.name:<13} {d.n:>5} {noise_tvd(d, 4000):>8.4f} " + " ".join(f"{scores[d.name][c]:>13.4f}"
+        print(f"{d.name:<13} {d.n:>5} {noise_tvd(d, 4000):>8.4f} " + " ".join(_cell(scores[d.name][c])
                                                                          for c in columns))  # fmt: skip
+    unsettled = [d for d in dice if np.isnan(scores[d.name]["validate"])]
+    if unsettled:
+        shares = [settled_share(d, drops=args.sims, seed=args.seed, cache=cache) for d in unsettled]
+        print("unsettled: " + ", ".join(f"{d.name} {share:.0%}" for d, share in zip(unsettled, shares))
+              + f" of the drops at the default physics come to rest (under {SETTLED:.0%}): left out of the "
+              "simulated columns and their means")  # fmt: skip
     mean = mean_scores(dice, scores)
     for label, group in die_sets(dice).items():
         if group:
             m = mean_scores(group, scores)
-            print(f"mean, {label} ({len(group)}): " + ", ".join(f"{c} {m[c]:.4f}" for c in columns))
+            print(f"mean, {label} ({len(group)}): " + ", ".join(f"{c} {m[c]:.4f}" for c in columns
+                                                                 if not np.isnan(m[c])))  # fmt: skip
     print(f"{'mean':<13} {'':>5} {'':>8} " + " ".join(f"{mean[c]:>13.4f}" for c in columns))
     print(f"\nTVD to the real counts; validate: {args.sims} drops per die, seed {args.seed}, default physics "
           f"and each shipped profile fitted on real dice ({', '.join(profiles)}), "
@@ -287,7 +304,8 @@ def guard(args) -> None:
 
         data = {"tolerance": GUARD_TOLERANCE, "drops": args.sims, "seed": args.seed, "profiles": profiles,
                 "dice": [d.name for d in dice], "mean": {c: round(mean[c], 5) for c in columns},
-                "per_die": {d.name: {c: round(scores[d.name][c], 5) for c in columns} for d in dice},
+                "per_die": {d.name: {c: None if np.isnan(scores[d.name][c]) else round(scores[d.name][c], 5)
+                                     for c in columns} for d in dice},
                 "command": f"python benchmarks/bench_realrolls.py --guard --sims {args.sims} --seed {args.seed} "
                            "--record"}  # fmt: skip
         atomic_write(GUARD, json.dumps(data, indent=1) + "\n")

@@ -64,8 +64,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--dice", default="", help="comma-separated die names (default: every printed die)")
     parser.add_argument("--evals", type=int, default=150, help="most evaluations of the basins model per die")
     args = parser.parse_args(argv)
+    # printed dice only: the cuboids and the coins are homogeneous solids
     dice = [d for d in load_real_dice(ROOT / ".." / "shared" / "realrolls", paper=False, published=True)
-            if not d.name.startswith("cuboid-")]  # fmt: skip
+            if not d.name.startswith(("cuboid-", "coin-"))]  # fmt: skip
     if args.dice:
         dice = [d for d in dice if d.name in args.dice.split(",")]
     print(f"{'die':<22} {'rolls':>5} {'noise':>6} {'TVD':>6} {'fitted':>7} {'deviance':>9} {'fitted':>7} "

@@ -43,6 +43,7 @@ BENCHMARKS = [
     ("fit_center_of_mass.py", [], ["--dice", "binom3,kitten_d3", "--evals", "40"]),
     ("fit_chain.py", [], ["--evals", "20"]),
     ("fit_cuboid_curves.py", [], []),
+    ("bench_coins.py", ["--rolling-friction", "0,0.01"], ["--sides", "16,128", "--drops", "100"]),
     ("bench_basins.py", [], []),
     ("bench_many_faces.py", [], ["--sims", "40"]),
     ("bench_fair_shapes.py", [], ["--faces", "22", "--sims", "600"]),

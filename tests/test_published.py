@@ -72,3 +72,35 @@ def test_landing_model_scores_agree_with_the_guard_on_dice_with_mirror_groups():
         for model, s in scores.items():
             assert s["tvd"] == pytest.approx(model_tvd(die, model))
             assert sum(s["predicted"]) == pytest.approx(1.0) and 0 < s["expected_tvd"] < 0.1
+
+
+def test_every_coin_of_the_table_gives_its_flips_and_its_edge_share():
+    import json
+    from importlib import resources
+
+    from diefab.search.published import thick_coin_dice
+
+    table = json.loads(resources.files("diefab").joinpath("data", "published", "thick-coins.json").read_text())
+    dice = thick_coin_dice()
+    assert len(dice) == len(table["table"]) == 2 and "Stand-up Maths" in published_source("thick-coins")
+    for d, row in zip(dice, table["table"]):
+        assert d.design.support == [0, 1] and d.n == row["flips"] and d.counts[1] / d.n == pytest.approx(row["edge"])
+
+
+@pytest.mark.parametrize(("ratio", "sides"), [(0.3535, 16), (0.577, 128)])
+def test_thick_coin_geometry(ratio, sides):
+    from diefab.search.published import thick_coin
+
+    d = thick_coin(ratio, sides=sides)
+    poly = d.polyhedron
+    assert len(poly.faces) == sides + 2
+    z = poly.vertices[:, 2]
+    assert np.ptp(z) / 2 == pytest.approx(ratio)  # thickness over the diameter 2
+    axial = np.isclose(np.abs(poly.normals[:, 2]), 1)
+    assert [d.values[n] for n, a in zip(poly.names, axial) if a] == [0, 0]
+    assert all(d.values[n] == 1 for n, a in zip(poly.names, axial) if not a)
+    # every side is tangent to the unit circle, so the prism's volume is the polygon's area times the thickness
+    centre = poly.vertices.mean(axis=0)
+    sides_at = [np.dot(poly.normals[k], poly.vertices[poly.faces[k][0]] - centre) for k in np.flatnonzero(~axial)]
+    assert np.allclose(sides_at, 1.0)
+    assert poly.volume == pytest.approx(sides * np.tan(np.pi / sides) * 2 * ratio)

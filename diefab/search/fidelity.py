@@ -10,6 +10,11 @@ value.  :func:`model_tvd` scores a landing model (``solid-angle``,
 their TVD to the real frequencies, mirror-image outcomes compared up to
 relabelling (:func:`diefab.physics.realrolls.grouped_tvd`).
 
+A die the simulation cannot settle is left out of the simulated columns:
+where fewer than :data:`SETTLED` of its drops at its own physics come to
+rest within the time limit (a thick coin, a prism of many sides, still
+rolls on its edge), the drops that did are not a sample of its landings.
+
 Simulated counts are cached (:class:`SimulationCache`) under a key of the
 design, the physics settings, the seed, the number of drops and the
 simulation's code (:func:`simulation_key`), so that a guard of the
@@ -38,6 +43,7 @@ from diefab.search.realdie import RealDie
 __all__ = [
     "LANDING_MODELS",
     "PAPER_DIE_TOML",
+    "SETTLED",
     "TABLE_2",
     "SimulationCache",
     "guard_scores",
@@ -48,12 +54,16 @@ __all__ = [
     "model_tvd",
     "noise_tvd",
     "paper_die",
+    "settled_share",
     "simulated_tvd",
     "simulation_key",
 ]
 
 #: The landing models ``diefab predict`` offers, scored against real dice.
 LANDING_MODELS = ("solid-angle", "basins", "fast")
+
+#: Share of a die's drops that must come to rest for the simulation to score it.
+SETTLED = 0.95
 
 #: The paper's real rolls (Table 2) of its final die, values -4 .. 4.
 TABLE_2 = (0, 20, 48, 80, 89, 83, 66, 17, 2)
@@ -85,7 +95,7 @@ def paper_die() -> RealDie:
 def load_real_dice(folder: str | Path | None, *, paper: bool = True, published: bool = False) -> list[RealDie]:
     """The paper's die (if `paper`), every die of the real-rolls `folder` (``*.json``, sorted by name) and,
     if `published`, the published dice shipped with diefab (:func:`diefab.search.published.printed_dice`,
-    :func:`diefab.search.published.square_cuboid_dice`).
+    :func:`diefab.search.published.square_cuboid_dice`, :func:`diefab.search.published.thick_coin_dice`).
 
     A `folder` that is None or does not exist contributes no die.
     """
@@ -95,9 +105,9 @@ def load_real_dice(folder: str | Path | None, *, paper: bool = True, published: 
     if folder is not None and Path(folder).is_dir():
         dice += [realrolls_die(p) for p in sorted(Path(folder).glob("*.json"))]
     if published:
-        from diefab.search.published import printed_dice, square_cuboid_dice
+        from diefab.search.published import printed_dice, square_cuboid_dice, thick_coin_dice
 
-        dice += printed_dice() + square_cuboid_dice()
+        dice += printed_dice() + square_cuboid_dice() + thick_coin_dice()
     return dice
 
 
@@ -213,9 +223,13 @@ def simulated_tvd(die: RealDie, settings=None, *, drops: int, seed: int = 0, cac
 
 
 def mean_scores(dice: Sequence[RealDie], scores: Mapping[str, Mapping[str, float]]) -> dict[str, float]:
-    """Per column, the mean of `scores` (die name -> column -> TVD) over `dice`."""
+    """Per column, the mean of `scores` (die name -> column -> TVD) over `dice`, leaving out dice not scored (NaN)."""
     columns = next(iter(scores.values())).keys() if scores else ()
-    return {c: float(np.mean([scores[d.name][c] for d in dice])) for c in columns}
+    means = {}
+    for c in columns:
+        column = np.array([scores[d.name][c] for d in dice], dtype=float)
+        means[c] = float(np.mean(column[~np.isnan(column)])) if not np.isnan(column).all() else float("nan")
+    return means
 
 
 def guard_settings(die: RealDie, profiles: Sequence[str] = ()) -> dict[str, Any]:
@@ -232,13 +246,26 @@ def guard_settings(die: RealDie, profiles: Sequence[str] = ()) -> dict[str, Any]
     return columns | {f"validate --profile {p}": load_profile(p, base=die.design.physics) for p in profiles}
 
 
+def settled_share(die: RealDie, *, drops: int, seed: int, cache: SimulationCache | None = None,
+                  workers: int | None = 1) -> float:  # fmt: skip
+    """The share of `drops` drops of `die` at its own physics that come to rest (simulated or cached)."""
+    settings = guard_settings(die)["validate"]
+    return float((cache or SimulationCache(None)).counts(die, settings, drops, seed, workers).sum()) / drops
+
+
 def guard_scores(dice: Sequence[RealDie], *, drops: int, seed: int, cache: SimulationCache | None,
                  workers: int | None = 1, profiles: Sequence[str] = ()) -> dict[str, Any]:  # fmt: skip
-    """Per die, the TVD to its real rolls of each landing model and each simulated column (:func:`guard_settings`)."""
+    """Per die, the TVD to its real rolls of each landing model and each simulated column (:func:`guard_settings`).
+
+    A die of which fewer than :data:`SETTLED` of the drops come to rest at
+    its own physics (:func:`settled_share`) gets NaN in every simulated column.
+    """
     out: dict[str, dict[str, float]] = {}
     for die in dice:
         row = {m: model_tvd(die, m) for m in LANDING_MODELS}
+        settles = settled_share(die, drops=drops, seed=seed, cache=cache, workers=workers) >= SETTLED
         for column, settings in guard_settings(die, profiles).items():
-            row[column] = simulated_tvd(die, settings, drops=drops, seed=seed, cache=cache, workers=workers)
+            row[column] = (simulated_tvd(die, settings, drops=drops, seed=seed, cache=cache, workers=workers)
+                           if settles else float("nan"))  # fmt: skip
         out[die.name] = row
     return out
