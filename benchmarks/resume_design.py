@@ -23,7 +23,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from diefab.physics.checkpoint import DropStore
+from diefab.physics.dropfile import DropFile
 
 ROOT = Path(__file__).resolve().parent.parent
 #: Fields of a design report that change from run to run whatever the drops.
@@ -48,6 +48,11 @@ def _design(args: list[str], out: Path) -> tuple[dict, float]:
     return json.loads(done.stdout), time.monotonic() - start
 
 
+def _kept(folder: Path) -> int:
+    """The drops the drop files of `folder` hold."""
+    return sum(DropFile(path).count() for path in sorted(folder.glob("*.npz")))
+
+
 def _differs(whole: dict, other: dict) -> list[str]:
     return sorted(k for k in whole.keys() - VOLATILE if whole[k] != other.get(k))
 
@@ -63,7 +68,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         whole, seconds = _design(base, tmp / "whole")
-        print(f"$ diefab design {' '.join(base)}: uninterrupted, {seconds:.0f} s, {whole['drops']:,} search drops")
+        print(f"uninterrupted: diefab design {' '.join(base)}, {seconds:.0f} s, {whole['drops']:,} search drops")
         kept = [*base, "--checkpoint", str(tmp / "drops")]
         stops = [(signal.SIGINT, False), (signal.SIGTERM, True), (signal.SIGHUP, True)]
         for (signum, to_group), at in zip(stops, opts.at):
@@ -75,7 +80,7 @@ def main() -> None:
             _, err = proc.communicate()
             last = err.strip().splitlines()[-1].replace(str(tmp / "drops"), "DIR") if err.strip() else ""
             print(f"{signal.Signals(signum).name} to the {'group' if to_group else 'process'} at {at:g} s: "
-                  f"exit {proc.returncode}, {DropStore(tmp / 'drops').held():,} drops kept; {last}")  # fmt: skip
+                  f"exit {proc.returncode}, {_kept(tmp / 'drops'):,} drops kept; {last}")  # fmt: skip
         for what in ("continued to the end", "again on the full folder"):
             report, seconds = _design(kept, tmp / "kept")
             c = report["checkpoint"]

@@ -322,3 +322,24 @@ def test_hull_diameter_is_the_largest_distance_between_two_points():
         assert hull_diameter(pts) == pytest.approx(pdist(pts).max(), rel=1e-12)
     with pytest.raises(GeometryError, match="degenerate|no volume"):
         hull_diameter([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]])
+
+
+def test_solids_cut_by_random_planes_have_counter_clockwise_faces_on_their_planes():
+    from diefab.dice.families.planes import polyhedron_from_planes, unit
+
+    rng = np.random.default_rng(11)
+    built = 0
+    for _ in range(400):
+        m = int(rng.integers(6, 25))
+        normals, offsets = unit(rng.normal(size=(m, 3))), rng.uniform(0.7, 1.3, m)
+        try:
+            poly = polyhedron_from_planes(normals, offsets)
+        except GeometryError:
+            continue
+        built += 1
+        assert np.allclose(poly.normals, normals, atol=1e-9)  # face k on plane k, its ring CCW seen from outside
+        assert np.allclose(poly.offsets, offsets, atol=1e-9)
+        tail, head, face, start = poly._ring
+        assert np.array_equal(head, np.concatenate([np.roll(f, -1) for f in poly.faces]))
+        assert np.array_equal(tail[start], [f[0] for f in poly.faces]) and np.array_equal(face[start], np.arange(m))
+    assert built > 40

@@ -261,10 +261,12 @@ class Polyhedron:
         edge, the face it bounds, and where each face's edges begin.
         """
         tail = np.concatenate(self.faces)
-        head = np.concatenate([np.roll(f, -1) for f in self.faces])
-        face = np.repeat(np.arange(len(self.faces)), [len(f) for f in self.faces])
-        start = np.concatenate([[0], np.cumsum([len(f) for f in self.faces])[:-1]])
-        return tail, head, face, start
+        sizes = np.array([len(f) for f in self.faces])
+        start = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+        after = np.arange(1, len(tail) + 1)
+        after[start + sizes - 1] = start  # each face's last edge ends at its first vertex
+        face = np.repeat(np.arange(len(self.faces)), sizes)
+        return tail, tail[after], face, start
 
     @cached_property
     def triangles(self) -> np.ndarray:

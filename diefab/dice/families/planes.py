@@ -18,9 +18,9 @@ import numpy as np
 
 from diefab.core import tolerances as tol
 from diefab.core.errors import GeometryError
-from diefab.geometry.polyhedron import Polyhedron
+from diefab.geometry.polyhedron import Polyhedron, _cross
 
-__all__ = ["polyhedron_from_planes", "unit"]
+__all__ = ["face_rings", "polyhedron_from_planes", "unit"]
 
 
 def unit(vectors: np.ndarray) -> np.ndarray:
@@ -63,17 +63,31 @@ def polyhedron_from_planes(normals: np.ndarray, offsets: np.ndarray) -> Polyhedr
     close = np.abs(points[:, None, :] - points[None, :, :]).max(axis=2) < eps
     points = points[~np.tril(close, -1).any(axis=1)]  # near-duplicates (several planes through one vertex)
     on = np.abs(points @ normals.T - offsets) < eps
+    return Polyhedron(points, face_rings(points, normals, on))
+
+
+def face_rings(points: np.ndarray, normals: np.ndarray, on: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Each plane's face: the points on it (`on`, (n, m) bool), counter-clockwise seen from outside.
+
+    A face's points are ordered by their angle about its centre in a basis
+    ``(u, v)`` of its plane; every face's basis comes from one row-wise
+    cross product.
+
+    Raises
+    ------
+    GeometryError
+        If a plane holds fewer than three points.
+    """
+    u = _cross(normals, np.where(np.abs(normals[:, :1]) < 0.9, [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]))
+    v = _cross(normals, u)
     faces = []
     for k in range(len(normals)):
         ring = np.flatnonzero(on[:, k])
         if len(ring) < 3:
             raise GeometryError(f"plane f{k + 1} does not cut a face of the die")
-        # counter-clockwise seen from outside: by angle about the normal
-        u = np.cross(normals[k], [1.0, 0, 0] if abs(normals[k, 0]) < 0.9 else [0, 1.0, 0])
-        v = np.cross(normals[k], u)
         rel = points[ring] - points[ring].mean(axis=0)
-        faces.append(ring[np.argsort(np.arctan2(rel @ v, rel @ u))])
-    return Polyhedron(points, tuple(faces))
+        faces.append(ring[np.argsort(np.arctan2(rel @ v[k], rel @ u[k]))])
+    return tuple(faces)
 
 
 def _open_direction(normals: np.ndarray) -> bool:
