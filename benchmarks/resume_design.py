@@ -8,7 +8,7 @@ drops DIR held after each stop, and every field of the continued runs'
 reports that differs from the uninterrupted one's (the design file's path
 and the time always do).
 
-Run:  python benchmarks/resume_design.py [TARGET] [--at 30 40 50] [--workers 2]
+Run:  python benchmarks/resume_design.py [TARGET] [--at 30 20 15] [--workers 2]
 """
 
 from __future__ import annotations
@@ -60,7 +60,7 @@ def _differs(whole: dict, other: dict) -> list[str]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("target", nargs="?", default="3d6")
-    parser.add_argument("--at", type=float, nargs=3, default=(30.0, 40.0, 50.0), metavar=("INT", "TERM", "HUP"),
+    parser.add_argument("--at", type=float, nargs=3, default=(30.0, 20.0, 15.0), metavar=("INT", "TERM", "HUP"),
                         help="seconds after each start at which SIGINT, SIGTERM and SIGHUP are sent")  # fmt: skip
     parser.add_argument("--workers", default="2")
     opts = parser.parse_args()

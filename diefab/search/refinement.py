@@ -25,7 +25,6 @@ from diefab.core.errors import DesignError
 from diefab.dice.design import Design
 from diefab.dice.targets import Target
 from diefab.models.probabilities import model_probabilities
-from diefab.search.optimize import optimize_design
 from diefab.search.stage import RANK_MODEL, SearchRun, Synthesis
 from diefab.stats.goodness import tvd
 
@@ -142,9 +141,8 @@ def refine(
             weight *= RELAX
         correction = measured if correction is None else correction + weight * (measured - correction)
         try:
-            result = optimize_design(design, model=RANK_MODEL, min_margin=min_margin, starts=0, seed=run.seed,
-                                     name=design.name, correction=correction, deadline=run.deadline,
-                                     budget=STEP_EVALUATIONS)  # fmt: skip
+            result = run.optimize(design, model=RANK_MODEL, min_margin=min_margin, starts=0, seed=run.seed,
+                                  name=design.name, correction=correction, budget=STEP_EVALUATIONS)  # fmt: skip
         except DesignError:
             break
         run.note_cap()

@@ -67,6 +67,25 @@ class SearchRun:
     #: Where every drop is kept (a :class:`~diefab.physics.checkpoint.DropStore`), so that a stopped search run
     #: again drops only what it had not; None keeps nothing.
     store: Any = None
+    #: The model optimizations kept beside the store's drops (made with the first one).
+    memo: Any = None
+
+    def optimize(self, design: Design, **options):
+        """:func:`~diefab.search.optimize.optimize_design` of `design` before the search's deadline.
+
+        With a :attr:`store`, each optimization is kept beside the drops
+        (:class:`~diefab.search.memo.OptimizationMemo`), so a search run
+        again takes the ones it made instead of repeating them.
+        """
+        if self.store is None:
+            from diefab.search.optimize import optimize_design
+
+            return optimize_design(design, deadline=self.deadline, **options)
+        if self.memo is None:
+            from diefab.search.memo import OptimizationMemo
+
+            self.memo = OptimizationMemo(self.store.folder)
+        return self.memo.optimize(design, deadline=self.deadline, **options)
 
     def note_cap(self) -> None:
         """Record that the wall-time cap has passed (the stage that just ended may have been cut)."""

@@ -62,7 +62,7 @@ from diefab.search.counted import (
     nearest_faces_clause,
     two_class_design,
 )
-from diefab.search.optimize import INFEASIBLE, optimize_design
+from diefab.search.optimize import INFEASIBLE
 from diefab.search.refinement import MIN_THROW_DROPS, REFINE_DROPS, REFINE_GOAL, STEP_EVALUATIONS, not_on_faces, refine
 from diefab.search.stage import RANK_MODEL, SearchRun, Synthesis
 from diefab.stats.goodness import tvd
@@ -256,9 +256,8 @@ def synthesize(
         tick("ranking candidates", i, len(pool))
         try:
             start = _start(cand, target, name, fill, size_mm)
-            result = optimize_design(start, model="solid-angle", min_margin=min_margin, starts=2, seed=seed,
-                                     name=name, deadline=deadline, max_evaluations=RANK_EVALUATIONS // 4,
-                                     budget=RANK_EVALUATIONS)  # fmt: skip
+            result = run.optimize(start, model="solid-angle", min_margin=min_margin, starts=2, seed=seed, name=name,
+                                  max_evaluations=RANK_EVALUATIONS // 4, budget=RANK_EVALUATIONS)  # fmt: skip
         except DesignError as exc:
             tried.append({"family": cand.family, "faces": cand.faces, "objective": None, "error": str(exc)})
             say(f"{cand.family} ({cand.faces} faces): {exc}")
@@ -283,8 +282,8 @@ def synthesize(
     # the polish: under the final model, from the ranked winner
     tick(f"polishing under the {final_model} model", 0, 1)
     try:
-        again = optimize_design(best.design, model=final_model, min_margin=min_margin, starts=0, seed=seed,
-                                name=name, deadline=deadline, budget=POLISH_EVALUATIONS)  # fmt: skip
+        again = run.optimize(best.design, model=final_model, min_margin=min_margin, starts=0, seed=seed,
+                             name=name, budget=POLISH_EVALUATIONS)  # fmt: skip
         say(f"{again.design.family}: Eq. (2) {again.objective:.5f} under the {final_model} model")
         best = again
     except DesignError as exc:
