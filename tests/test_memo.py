@@ -44,7 +44,8 @@ def test_a_kept_result_the_models_no_longer_give_is_made_again(tmp_path):
     first = OptimizationMemo(tmp_path).optimize(gem, **OPTIONS)
     (path,) = (tmp_path / "optimized").glob("*.json")
     kept = json.loads(path.read_text())
-    for change in ({"objective": (first.objective * 1.5).hex()}, {"params": "not a list"}, None):
+    for change in ({"objective": (first.objective * 1.5).hex()}, {"params": "not a list"}, {"pad": "x" * 2**20},
+                   None):  # fmt: skip
         path.write_text("{ not json" if change is None else json.dumps(kept | change))
         again = OptimizationMemo(tmp_path)
         _same(again.optimize(gem, **OPTIONS), first)

@@ -29,6 +29,9 @@ from diefab.search.optimize import OptimizationResult, Problem, optimize_design
 
 __all__ = ["OptimizationMemo"]
 
+#: Largest file read as a kept optimization (one holds a few kilobytes).
+MAX_BYTES = 1 << 20
+
 
 class OptimizationMemo:
     """The optimizations of one search, kept in the folder ``optimized`` of `folder`.
@@ -103,8 +106,11 @@ def _numbers(result: OptimizationResult) -> dict[str, Any]:
 
 
 def _read(path: Path, key: str) -> dict[str, Any] | None:
-    """The kept result of `key` at `path`, or None (no file, another key, or a file that is not one)."""
+    """The kept result of `key` at `path`, or None (no file, another key, a file that is not one or is too large)."""
+    from diefab.core.files import check_size
+
     try:
+        check_size(path, MAX_BYTES, "kept optimization", ValueError)
         kept = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
