@@ -81,8 +81,14 @@ class OptimizationMemo:
 
 def _digest(design: Design, options: dict[str, Any]) -> str:
     """Hex digest of what decides an optimization: the start design, the options and the package's version."""
-    from diefab import __version__
+    from importlib.metadata import PackageNotFoundError, version
+
     from diefab.dice.design import design_to_toml
+
+    try:
+        package = version("diefab")
+    except PackageNotFoundError:  # pragma: no cover - run from a checkout that was never installed
+        package = "unknown"
 
     correction = options.get("correction")
     plain = {k: (list(v) if isinstance(v, tuple) else v) for k, v in options.items()
@@ -91,7 +97,7 @@ def _digest(design: Design, options: dict[str, Any]) -> str:
         array = np.ascontiguousarray(correction, dtype=np.float64)
         plain["correction"] = [list(array.shape), hashlib.sha256(array.tobytes()).hexdigest()]
     digest = hashlib.sha256()
-    for part in (design_to_toml(design), json.dumps(plain, sort_keys=True, default=str), __version__):
+    for part in (design_to_toml(design), json.dumps(plain, sort_keys=True, default=str), package):
         digest.update(part.encode("utf-8") + b"\0")
     return digest.hexdigest()
 
