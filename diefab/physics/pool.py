@@ -15,6 +15,8 @@ import sys
 import time
 from typing import Any
 
+from diefab.core import files
+
 __all__ = ["SIGNAL_POLL", "shutdown_pool", "signals_held", "worker_pool"]
 
 _POOL: Any = None
@@ -50,7 +52,6 @@ def worker_pool(workers: int):
 
 #: Seconds the parent waits on its workers at a time before it looks for a stop signal.
 SIGNAL_POLL = 0.25
-_STOP_SIGNALS = {getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)}
 
 
 @contextlib.contextmanager
@@ -61,7 +62,7 @@ def signals_held():
     if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, set(files.STOP_SIGNALS))  # the stops files defers
     try:
         yield
     finally:
@@ -80,7 +81,7 @@ def _worker_start(parent: int) -> None:
 
     worker_signals()  # before the signals held back while the parent forked arrive, not after
     if hasattr(signal, "pthread_sigmask"):
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, _STOP_SIGNALS)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, set(files.STOP_SIGNALS))
     if not _die_with_parent() or os.getppid() != parent:  # no prctl, or the parent is already gone
         import threading
 

@@ -327,7 +327,6 @@ def simulate(
         )
     n, seed = int(n), int(seed)
     outcomes = _known(known, n, len(design.polyhedron.faces))
-    batches = _batches(outcomes == UNKNOWN, 1 if scheduler is None and workers == 1 else workers)
     resumed = done = int(np.count_nonzero(outcomes != UNKNOWN))
     started = time.perf_counter()
 
@@ -341,6 +340,7 @@ def simulate(
             keep(outcomes)
 
     try:
+        batches = _batches(outcomes == UNKNOWN, 1 if scheduler is None and workers == 1 else workers)
         if scheduler is not None:
             client, own = dask_client(scheduler)  # first: a missing Dask is one line naming the extra
             try:
@@ -372,10 +372,11 @@ def simulate(
                 pending = {pool.submit(run_batch, body, settings, seed, a, b): (a, b) for a, b in batches}
             while pending:
                 # the timeout brings the main thread back now and then, to raise a stop noted meanwhile
-                with signals_deferred():
+                with signals_deferred():  # a result is read under its future's lock too
                     ready, _ = wait(pending, timeout=SIGNAL_POLL, return_when=FIRST_COMPLETED)
-                for future in ready:
-                    finished(*pending.pop(future), future.result())
+                    results = [(pending.pop(future), future.result()) for future in ready]
+                for batch, codes in results:
+                    finished(*batch, codes)
                 check_stop()  # an interrupt that landed where it was swallowed (inside the pool's machinery)
     except KeyboardInterrupt:
         if scheduler is None and workers > 1:
