@@ -260,6 +260,7 @@ def guard_scores(dice: Sequence[RealDie], *, drops: int, seed: int, cache: Simul
     A die of which fewer than :data:`SETTLED` of the drops come to rest at
     its own physics (:func:`settled_share`) gets NaN in every simulated column.
     """
+    cache = cache if cache is not None else SimulationCache(None)  # one for the whole table: no drop run twice
     out: dict[str, dict[str, float]] = {}
     for die in dice:
         row = {m: model_tvd(die, m) for m in LANDING_MODELS}
