@@ -231,3 +231,8 @@ def test_a_stopped_design_says_where_its_drops_are_and_continues_from_them(run, 
     assert second["checkpoint"]["resumed"] == 300 and second["validated"] == first["validated"]
     (tmp_path / "file").write_text("")
     assert "is a file" in bad(*args[:-1], tmp_path / "file")
+    (tmp_path / "blocked").mkdir()
+    (tmp_path / "blocked" / "optimized").write_text("")  # where the search keeps its optimizations
+    assert "optimized (where the search keeps its optimizations) is not a folder" in bad(
+        *args[:-1], tmp_path / "blocked"
+    )

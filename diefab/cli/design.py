@@ -304,12 +304,17 @@ def _store(name: str):
     """``--checkpoint``: the drop store in folder `name`, held by this process until it ends."""
     from diefab.core.files import ensure_dir, hold_lock
     from diefab.physics.checkpoint import DropStore
+    from diefab.search.memo import OptimizationMemo
 
     if not name.strip():
         raise click.BadParameter("name a folder", param_hint="--checkpoint")
     folder = Path(name)
     if folder.exists() and not folder.is_dir():
         raise click.BadParameter(f"{folder} exists and is not a folder", param_hint="--checkpoint")
+    kept = folder / OptimizationMemo.FOLDER
+    if kept.exists() and not kept.is_dir():
+        raise click.BadParameter(f"{kept} (where the search keeps its optimizations) is not a folder",
+                                 param_hint="--checkpoint")  # fmt: skip
     ensure_dir(folder)
     hold_lock(folder, f"design checkpoint {folder}")
     return DropStore(folder)
