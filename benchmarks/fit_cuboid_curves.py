@@ -1,6 +1,6 @@
 """How close any smooth law of the aspect ratio comes to the 15 published cuboids: a ceiling for every model.
 
-    python benchmarks/fit_cuboid_curves.py | tee benchmarks/results/fit_cuboid_curves.txt
+    python benchmarks/fit_cuboid_curves.py --per-die | tee benchmarks/results/fit_cuboid_curves.txt
 
 A landing model of fixed physics sees a square cuboid only through its
 aspect ratio r = x/y, and gives its square faces a share p(r) that varies
@@ -15,7 +15,8 @@ binomial maximum likelihood (with p(1) = 1/3 where stated: a cube is fair):
   larger) and another for r > 1, meeting at the fair cube.
 
 Each is scored in-sample and held out (each die from a fit on the other 14),
-by its mean TVD over the mean sampling noise, and by Pearson's chi-square of
+by its mean TVD over the mean sampling noise (and, with ``--per-die``, each
+die's held-out TVD over its own noise), and by Pearson's chi-square of
 the counts about the in-sample fit, with its p-value: a small p-value says
 the dice scatter about the curve more than binomial sampling allows (the
 dice differ in more than their ratio: their throwers, their surface, their
@@ -74,7 +75,12 @@ def fit(p, start: np.ndarray, square: np.ndarray, n: np.ndarray, rows: np.ndarra
     return minimize(nll, start, method="Nelder-Mead", options=options).x
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--per-die", action="store_true", help="also each die's held-out TVD over its noise")
+    args = parser.parse_args(argv)
     dice = square_cuboid_dice()
     n = np.array([d.n for d in dice])
     square = np.array([d.counts[1] for d in dice])
@@ -85,6 +91,7 @@ def main() -> int:
         return dice[i].tvd(np.array([1 - q, q]))
 
     everyone = np.arange(len(dice))
+    per_die = {}
     print(f"the {len(dice)} published square cuboids ({n.sum()} rolls): smooth laws p_square(x/y), "
           f"mean noise {noise.mean():.4f}\n")  # fmt: skip
     print(f"{'curve':<24} {'params':>6} {'in-sample':>17} {'held out':>17} "
@@ -92,7 +99,9 @@ def main() -> int:
     for name, (p, start) in curves(r).items():
         q = p(fit(p, start, square, n, everyone))
         inside = np.mean([tvd(i, q[i]) for i in everyone])
-        held = np.mean([tvd(i, p(fit(p, start, square, n, everyone[everyone != i]))[i]) for i in everyone])
+        held_each = np.array([tvd(i, p(fit(p, start, square, n, everyone[everyone != i]))[i]) for i in everyone])
+        held = held_each.mean()
+        per_die[name] = held_each / noise
         pearson = float(np.sum((square - n * q) ** 2 / (n * q * (1 - q))))
         dof = len(dice) - len(start)
         print(f"{name:<24} {len(start):>6} {inside:>8.4f} ({inside / noise.mean():.2f}x) "
@@ -102,6 +111,11 @@ def main() -> int:
         "\nin-sample: fitted on all 15; held out: each die from a fit on the other 14; "
         "chi-square: Pearson's, of the counts about the in-sample fit"
     )
+    if args.per_die:
+        print("\neach die held out, its TVD over its own sampling noise:")
+        print(f"{'curve':<24} " + " ".join(f"{x:>5.2f}" for x in r))
+        for name, ratio in per_die.items():
+            print(f"{name:<24} " + " ".join(f"{x:>5.1f}" for x in ratio))
     return 0
 
 
