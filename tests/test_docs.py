@@ -121,6 +121,16 @@ def test_quoted_figures_are_checked():
         check_quoted(["validated: 10000 drops, TVD 0.0119"], "validated: 10000 drops, TVD 0.0519", simulated=True)
 
 
+def test_ci_runs_the_readme_s_install_and_test_commands():
+    """What a new developer types is what CI runs: the README's developer install and its test command."""
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    tests = re.search(r"^## Tests\n+```sh\n(.+?)\n```", readme, flags=re.MULTILINE | re.DOTALL)
+    assert tests is not None and "\n" not in tests[1], "the README's Tests section shows one command"
+    ci = [line.strip() for line in (ROOT / ".ci" / "run").read_text(encoding="utf-8").splitlines()]
+    assert ci[-1] == tests[1]
+    assert 'pip install ".[test]"' in readme and any(line.endswith('pip install ".[test]"') for line in ci)
+
+
 def test_every_environment_variable_the_package_reads_is_documented():
     """A ``DIEFAB_*`` variable read anywhere in the package has its row in the command-line reference."""
     read = {m for path in (ROOT / "diefab").rglob("*.py")
