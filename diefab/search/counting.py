@@ -264,13 +264,15 @@ def nearest_dice(target: Target, max_faces: int = MAX_FACES, faces: int | None =
     sizes = [faces] if faces is not None else range(6, max_faces + 1, 2)
     unsteady = 0
     for m in sizes:
+        if m < len(target.values):  # every value needs a face: the shapes of fewer faces are not asked for
+            continue
         steady = m % 2 == 0 and bool(fair_shapes(m))
         # the steadiest fair shape tips more easily the more faces it has: once both families (bipyramids for
         # an even half, trapezohedra for an odd one) have failed in a row, every larger die fails too
         unsteady = 0 if steady else unsteady + 1
         if unsteady >= 2 and m > 6:
             break
-        if not steady or m < len(target.values):
+        if not steady:
             continue
         counts, distance = nearest_counts(target, m)
         if distance is not None:
