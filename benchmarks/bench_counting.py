@@ -63,7 +63,8 @@ def main(argv: list[str] | None = None) -> int:
             assert found == expected, name
         b, n = float(np.median(base)), float(np.median(new))
         print(f"{name:<12} {len(target.values):>6} {b:>14.2f} s {n:>11.2f} s {b / n:>5.2f}x  {len(found)}, the same")
-    print(f"\nmedian of {args.repeat} cold runs each, interleaved; every count: the fair shapes of 6, 8, ... faces "
+    runs = f"{args.repeat} cold run{'s' if args.repeat != 1 else ''}"
+    print(f"\nmedian of {runs} each, interleaved; every count: the fair shapes of 6, 8, ... faces "
           "below the target's number of values asked for first")  # fmt: skip
     return 0
 

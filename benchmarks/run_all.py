@@ -42,8 +42,15 @@ BENCHMARKS = [
     ("bench_throw.py", [], []),  # cached: prints in seconds
     ("fit_center_of_mass.py", [], ["--dice", "binom3,kitten_d3", "--evals", "40"]),
     ("fit_chain.py", [], ["--evals", "20"]),
-    ("fit_cuboid_curves.py", [], []),
+    ("fit_cuboid_curves.py", ["--per-die"], ["--per-die"]),
     ("bench_coins.py", ["--rolling-friction", "0,0.01"], ["--sides", "16,128", "--drops", "100"]),
+    (
+        "bench_coins.py",
+        ["--sides", "128", "--rolling-friction", "0,0.001,0.003,0.01,0.03"],
+        ["--sides", "128", "--rolling-friction", "0.03", "--drops", "100"],
+    ),
+    ("bench_planes.py", [], ["--dice", "50", "--repeat", "1", "--no-design"]),
+    ("bench_counting.py", [], ["--targets", "3d6", "--repeat", "1"]),
     ("bench_basins.py", [], []),
     ("bench_many_faces.py", [], ["--sims", "40"]),
     ("bench_fair_shapes.py", [], ["--faces", "22", "--sims", "600"]),
