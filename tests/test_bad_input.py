@@ -210,6 +210,15 @@ def test_no_write_outside_out(tmp_path, run, name, args):
     assert not Path("/tmp/diefab-escape-net.svg").exists() and not Path("/tmp/diefab-escape.toml").exists()
 
 
+@pytest.mark.parametrize("args", [["net", "fudge-gem-paper"], ["stl", "fudge-gem-print"], ["markers", "fudge-gem"],
+                                  ["design", "uniform:3"], ["optimize", "fudge-gem"], ["roll", "d6"]])  # fmt: skip
+def test_an_empty_output_folder_is_refused_not_read_as_this_one(tmp_path, bad, monkeypatch, args):
+    monkeypatch.chdir(tmp_path)
+    assert "'--out': name a folder ('.' for this one)" in bad(*args, "--out", "")
+    assert "name a folder" in bad(*args, "--out", "  ")
+    assert not any(tmp_path.iterdir())
+
+
 def test_simulation_run_folder_stays_in_out(tmp_path, run):
     before = _tree(tmp_path)
     args = ["--start", "design", "--sims-per-eval", "16", "--max-evals", "1", "--workers", "1"]

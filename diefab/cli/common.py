@@ -214,13 +214,23 @@ def values_dict(design: Design, probs: np.ndarray) -> dict[str, float]:
     return {str(v): float(p) for v, p in zip(design.support, probs)}
 
 
+def named_folder(ctx, param, value: str | Path | None) -> Path | None:
+    """An output folder's option as a path; an empty name is refused rather than read as the current folder."""
+    if value is None:
+        return None
+    if not str(value).strip():
+        raise click.BadParameter("name a folder ('.' for this one)", param_hint=f"'{param.opts[0]}'")
+    return Path(value)
+
+
 def out_option(func):
     return click.option(
         "--out",
         "out_dir",
-        type=click.Path(file_okay=False, path_type=Path),
-        default=Path("out"),
+        type=click.Path(file_okay=False),
+        default="out",
         show_default=True,
+        callback=named_folder,
         help="Output folder.",
     )(func)
 

@@ -7,14 +7,14 @@ from pathlib import Path
 
 import click
 
-from diefab.cli.common import design_argument, get_design
+from diefab.cli.common import design_argument, get_design, named_folder
 from diefab.cli.live import bars
 
 
 @click.command()
 @design_argument
 @click.option("--target", default=None, help="Override the design's target distribution.")
-@click.option("--out", "out", type=click.Path(file_okay=False, path_type=Path), default=Path("."), show_default=True,
+@click.option("--out", "out", type=click.Path(file_okay=False), default=".", show_default=True, callback=named_folder,
               help="Folder of the roll log.")  # fmt: skip
 @click.option("--name", default=None, help="Name of the roll log, OUT/NAME-rolls.csv (default: the design's name).")
 @click.option("--delta", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.03, show_default=True,
