@@ -21,6 +21,7 @@ from diefab.cli.common import (
     emit_json,
     fill_options,
     json_option,
+    named_folder,
     out_option,
     physics_file_option,
     report_option,
@@ -74,7 +75,7 @@ def _slug(text: str) -> str:
               help="Drops of the closing check (on a seed the search never used); 0 skips it.")  # fmt: skip
 @click.option("--workers", type=click.IntRange(1, 256), default=None, help="Worker processes (default all cores).")
 @click.option("--scheduler", default=None, metavar="ADDRESS", help="Run the drops on this Dask scheduler.")
-@click.option("--checkpoint", "checkpoint", type=click.Path(file_okay=False), default=None,
+@click.option("--checkpoint", "checkpoint", type=click.Path(file_okay=False), default=None, callback=named_folder,
               metavar="DIR",
               help="Keep every drop of the search and the closing check in DIR; the same command with the same DIR "
               "drops only what it had not, and writes the same die (without --budget).")  # fmt: skip
@@ -300,15 +301,12 @@ def _kept(store):
         raise click.exceptions.Exit(130) from None
 
 
-def _store(name: str):
-    """``--checkpoint``: the drop store in folder `name`, held by this process until it ends."""
+def _store(folder: Path):
+    """``--checkpoint``: the drop store in `folder`, held by this process until it ends."""
     from diefab.core.files import ensure_dir, hold_lock
     from diefab.physics.checkpoint import DropStore
     from diefab.search.memo import OptimizationMemo
 
-    if not name.strip():
-        raise click.BadParameter("name a folder", param_hint="--checkpoint")
-    folder = Path(name)
     if folder.exists() and not folder.is_dir():
         raise click.BadParameter(f"{folder} exists and is not a folder", param_hint="--checkpoint")
     kept = folder / OptimizationMemo.FOLDER
