@@ -64,6 +64,10 @@ FLAT_DEG = (12.0, 24.0)
 REPROJECTION = (0.08, 0.16)
 
 
+#: Markers a pose on several markers must leave unexplained before the frame is taken to show another die.
+UNEXPLAINED = 2
+
+
 #: Pixels per cell at which a candidate marker's bits are read.  A marker seen obliquely is sampled finer than
 #: OpenCV's default of 4 and is then decoded: markers on the steep faces beside the top are found, so that a
 #: pose rests on several markers instead of one (whose two planar solutions may rest on different faces).
@@ -96,7 +100,9 @@ class Pose:
     """The die's pose in camera coordinates.
 
     rotation : (3, 3) float, model coordinates -> camera; translation : (3,) float, mm (the model origin).
-    markers : ids of the markers that agree with the pose; error : RMS reprojection error, pixels;
+    markers : ids of the markers that agree with the pose; conflicts : ids of markers of the die's dictionary
+    seen that the pose does not explain, on no face of the die or far from where the pose puts them (another
+    die numbered from the same dictionary, or a second die); error : RMS reprojection error, pixels;
     scale : mean image side of those markers, pixels; alternative : the other planar solution (rotation) of a
     one-marker pose when it fits almost as well; spread_deg : the rotation's standard error along its worst
     axis, degrees (from the solve's Jacobian and the corners' scatter); covariance : (3, 3) float, the
@@ -111,6 +117,7 @@ class Pose:
     alternative: np.ndarray | None = None
     spread_deg: float = 0.0
     covariance: np.ndarray | None = None
+    conflicts: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -201,15 +208,19 @@ def _project(points: np.ndarray, rotation: np.ndarray, translation: np.ndarray, 
     return uv[..., :2] / uv[..., 2:3]
 
 
-def _agreement(rotation, translation, objects, images, normals, camera) -> np.ndarray:
-    """(n,) float: each marker's worst corner reprojection error as a fraction of its image side (inf: hidden)."""
+def _agreement(rotation, translation, objects, images, normals, camera, *, hidden: bool = True) -> np.ndarray:
+    """(n,) float: each marker's worst corner reprojection error as a fraction of its image side.
+
+    inf for a marker behind the camera and, with `hidden`, for one on a face turned away from it.
+    """
     proj = _project(objects.reshape(-1, 3), rotation, translation, camera).reshape(objects.shape[0], 4, 2)
     side = np.linalg.norm(images - np.roll(images, 1, axis=1), axis=2).mean(axis=1)
     err = np.linalg.norm(proj - images, axis=2).max(axis=1) / np.maximum(side, 1.0)
     centres = objects.mean(axis=1) @ rotation.T + translation
-    facing = np.einsum("ij,ij->i", normals @ rotation.T, centres) < 0
-    depth_ok = centres[:, 2] > 0
-    return np.where(facing & depth_ok, err, np.inf)
+    seen = centres[:, 2] > 0
+    if hidden:
+        seen &= np.einsum("ij,ij->i", normals @ rotation.T, centres) < 0
+    return np.where(seen, err, np.inf)
 
 
 def solve_pose(
@@ -286,7 +297,14 @@ def solve_pose(
     scale = float(np.linalg.norm(images[inliers] - np.roll(images[inliers], 1, axis=1), axis=2).mean())
     spread, covariance = _rotation_spread(objects[inliers].reshape(-1, 3), rotation, translation, camera, error)
     ids_in = tuple(int(m) for m in marker_ids[inliers])
-    return Pose(rotation, translation, ids_in, error, scale, alternative, spread, covariance)
+    # markers the pose does not explain, of ids on no face or far from where the pose puts theirs: two of them
+    # (one, beside a one-marker pose) say that the frame holds another die numbered from the same dictionary,
+    # or two dice; one beside a pose on several markers is a pattern decoded by chance
+    far = _agreement(rotation, translation, objects, images, normals, camera, hidden=False) > COARSE_FRACTION
+    strangers = [int(m) for m in ids if int(m) not in row_of]
+    unexplained = tuple(sorted({*(int(m) for m in marker_ids[far]), *strangers}))
+    conflicts = unexplained if len(unexplained) >= (1 if len(inliers) == 1 else UNEXPLAINED) else ()
+    return Pose(rotation, translation, ids_in, error, scale, alternative, spread, covariance, conflicts)
 
 
 def _rotation_spread(objects, rotation, translation, camera, error: float) -> tuple[float, np.ndarray | None]:
@@ -388,7 +406,9 @@ def read_pose(pose: Pose, design: Design, down: np.ndarray = DOWN) -> tuple[int,
     (:data:`FLAT_DEG`: a die leaning on something is not at rest on a face)
     and the reprojection error relative to the markers' image size
     (:data:`REPROJECTION`).  A one-marker pose whose other planar solution
-    fits about as well and rests on another face has confidence 0.
+    fits about as well and rests on another face has confidence 0, and so
+    has a pose that leaves any of the die's markers seen unexplained
+    (``pose.conflicts``: the frame shows another die, or two).
 
     Parameters
     ----------
@@ -398,6 +418,8 @@ def read_pose(pose: Pose, design: Design, down: np.ndarray = DOWN) -> tuple[int,
     poly = design.polyhedron
     down = np.asarray(down, dtype=float) / np.linalg.norm(down)
     face, a1, a2 = _resting(pose.rotation, poly.normals, down)
+    if pose.conflicts:
+        return face, 0.0
     covariance = pose.covariance
     rotation = pose.rotation
     if pose.alternative is not None:

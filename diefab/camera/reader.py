@@ -37,7 +37,16 @@ from diefab.camera.settle import Roll, Settler
 from diefab.core.errors import DiefabError
 from diefab.dice.design import Design
 
-__all__ = ["IMAGE_SUFFIXES", "RollReader", "SourceError", "frames"]
+__all__ = [
+    "IMAGE_SUFFIXES",
+    "MIN_FRAME",
+    "RollReader",
+    "SourceError",
+    "check_frame",
+    "frames",
+    "photo_files",
+    "read_photo",
+]
 
 #: Image files read from a folder, in name order.
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
@@ -47,6 +56,8 @@ MOTION_SCALE = 8
 MOTION_LEVEL = 0.12
 #: ... and the frame moved when at least this many shrunk pixels changed.
 MOTION_PIXELS = 6
+#: Least width and height of a frame, pixels.
+MIN_FRAME = 64
 #: Frames with markers of other dictionaries only, and none of the die's, before the reader gives up.
 FOREIGN_FRAMES = 10
 
@@ -134,8 +145,11 @@ class RollReader:
         pad = max(x1 - x0, y1 - y0, 48)
         return max(0, x0 - pad), max(0, y0 - pad), min(w, x1 + pad), min(h, y1 + pad)
 
-    def read(self, gray: np.ndarray) -> FrameRead:
-        """Read one frame without the settle logic (near the die's last place first, then everywhere)."""
+    def read(self, gray: np.ndarray, photo: bool = False) -> FrameRead:
+        """Read one frame without the settle logic (near the die's last place first, then everywhere).
+
+        `photo`: the frame is a photo of a scene of its own, not the next frame of a stream.
+        """
         if self.camera is None:
             h, w = gray.shape
             self.camera = Camera.from_fov(w, h, self.fov)
@@ -146,20 +160,26 @@ class RollReader:
             read = read_frame(gray, self.design, self.detector, self.camera, **kwargs)
         if read.box is not None:
             self.box = read.box
-        self.detections += read.pose is not None
-        if read.pose is None and not self.detections:
-            self._check_foreign(gray, read)
+        clean = read.pose is not None and not read.pose.conflicts
+        self.detections += clean
+        if not clean and not self.detections:
+            self._check_foreign(gray, read, photo)
         return read
 
-    def _check_foreign(self, gray: np.ndarray, read: FrameRead) -> None:
-        if read.detected:
-            self._foreign += 1  # markers of the die's dictionary that are not on the die
+    def _check_foreign(self, gray: np.ndarray, read: FrameRead, photo: bool) -> None:
+        """Give up, with :class:`MarkerError`, on a source that keeps showing markers that are not this die's.
+
+        A frame counts 1 (a dictionary other than the die's: 5, looked for every 15th frame) and a photo,
+        which is a scene of its own, half of :data:`FOREIGN_FRAMES` (another dictionary: all of it).
+        """
+        if read.detected:  # markers of the die's dictionary that are not on the die, or not where the pose puts them
+            self._foreign += FOREIGN_FRAMES // 2 if photo else 1
             where = "markers that are not on this die"
         else:
-            other = self.detector.foreign(gray) if self.frame % 15 == 0 else None
+            other = self.detector.foreign(gray) if photo or self.frame % 15 == 0 else None
             if other is None:
                 return
-            self._foreign += 5
+            self._foreign += FOREIGN_FRAMES if photo else 5
             where = f"markers of {other}; design {self.design.name!r} uses {self.layout.dictionary}"
         if self._foreign >= FOREIGN_FRAMES:
             raise MarkerError(f"the camera sees {where}: is this the die of design {self.design.name!r}?")
@@ -183,9 +203,54 @@ class RollReader:
         """Read a photo of the die at rest (no motion or settle): one roll per photo, unread when unsure."""
         self.frame += 1
         self.box = None  # each photo is its own scene
-        read = self.read(gray)
+        read = self.read(gray, photo=True)
         self.last = read
         return read, Roll(self.frame, read.value, read.face, read.confidence)
+
+
+def photo_files(folder: str | Path) -> list[Path]:
+    """The images of `folder` (:data:`IMAGE_SUFFIXES`), in name order; SourceError when there are none."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise SourceError(f"image folder {folder} {'is not a folder' if folder.exists() else 'does not exist'}")
+    files = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES and p.is_file())
+    if not files:
+        raise SourceError(f"image folder {folder} holds no image ({', '.join(IMAGE_SUFFIXES)})")
+    return files
+
+
+def read_photo(path: str | Path) -> np.ndarray:
+    """One image file as a grayscale frame (uint8, (h, w)).
+
+    Raises
+    ------
+    SourceError
+        The file cannot be decoded, is too large to decode, or is too small to read markers on.
+    """
+    import cv2
+
+    try:
+        image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+    except cv2.error as exc:
+        why = "more pixels than OpenCV decodes" if "CV_IO_MAX_IMAGE_PIXELS" in str(exc) else _last_line(exc)
+        raise SourceError(f"cannot read image {path}: {why}") from None
+    if image is None:
+        raise SourceError(f"cannot read image {path}")
+    check_frame(image, f"image {path}")
+    return image
+
+
+def _last_line(exc: Exception) -> str:
+    """The last line of an OpenCV error, which names what failed."""
+    lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
+    return lines[-1] if lines else type(exc).__name__
+
+
+def check_frame(gray: np.ndarray, what: str = "frame") -> None:
+    """SourceError when a frame is too small to read a die on (under :data:`MIN_FRAME` pixels a side)."""
+    h, w = gray.shape[:2]
+    if min(h, w) < MIN_FRAME:
+        raise SourceError(f"{what} is {w} x {h} pixels: at least {MIN_FRAME} a side are needed to read markers")
 
 
 def frames(
@@ -212,40 +277,33 @@ def frames(
     if sum(x is not None for x in (camera, video, images)) != 1:
         raise SourceError("give exactly one source: a camera, a video file or a folder of images")
     if images is not None:
-        folder = Path(images)
-        if not folder.is_dir():
-            raise SourceError(f"image folder {folder} {'is not a folder' if folder.exists() else 'does not exist'}")
-        files = sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
-        if not files:
-            raise SourceError(f"image folder {folder} holds no image ({', '.join(IMAGE_SUFFIXES)})")
-        for i, path in enumerate(files):
-            image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
-            if image is None:
-                raise SourceError(f"cannot read image {path}")
-            yield float(i), image
+        for i, path in enumerate(photo_files(images)):
+            yield float(i), read_photo(path)
         return
     if video is not None:
         path = Path(video)
         if not path.is_file():
             raise SourceError(f"video {path} {'is not a regular file' if path.exists() else 'does not exist'}")
-        capture = cv2.VideoCapture(str(path))
+        capture, name = cv2.VideoCapture(str(path)), f"video {video}"
     else:
-        capture = cv2.VideoCapture(int(camera))
+        capture, name = cv2.VideoCapture(int(camera)), f"camera {camera}"
     try:
         if not capture.isOpened():
-            raise SourceError(f"cannot open {'video ' + str(video) if video is not None else f'camera {camera}'}")
+            raise SourceError(f"cannot open {name}")
         import time
 
         start = time.monotonic()
         first = True
         while True:
-            ok, image = capture.read()
+            try:
+                ok, image = capture.read()
+            except cv2.error as exc:
+                raise SourceError(f"cannot read {name}: {_last_line(exc)}") from None
             if not ok:
                 if first:
-                    raise SourceError(
-                        f"{'video ' + str(video) if video is not None else f'camera {camera}'} gives no frame"
-                    )
+                    raise SourceError(f"{name} gives no frame")
                 return
+            check_frame(image, f"{name}'s frame")
             first = False
             t = capture.get(cv2.CAP_PROP_POS_MSEC) / 1000 if video is not None else time.monotonic() - start
             yield t, cv2.cvtColor(image, cv2.COLOR_BGR2GRAY) if image.ndim == 3 else image

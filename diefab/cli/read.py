@@ -43,9 +43,10 @@ def read(
     live table shows the counts beside the target and the anytime-valid
     verdict, as `diefab roll` does.
     """
-    from diefab.camera.reader import RollReader, frames
+    from diefab.camera.reader import RollReader
+    from diefab.camera.session import LogReading
     from diefab.core.files import ensure_dir, hold_lock
-    from diefab.stats.rolllog import log_path, read_log
+    from diefab.stats.rolllog import log_path
     from diefab.stats.tally import Tally
 
     if sum(x is not None for x in (camera_index, video, images)) != 1:
@@ -55,50 +56,52 @@ def read(
     ensure_dir(out_dir)
     log = log_path(out_dir, name or d.name)
     hold_lock(log, f"roll log {log}")  # one writer per log, until the command ends
-    rows = list(read_log(log).rolls) if log.exists() else []
-    done = [r.value for r in rows if r.value is not None]
+    session = LogReading(reader, log)
+    done = [r.value for r in session.rows if r.value is not None]
     tally = Tally(d.support, d.target_distribution.aligned(d.support), delta, done)
-    source = frames(camera=camera_index, video=video, images=images)
+    source = session.read(camera=camera_index, video=video, images=images)
     first = next(source, None)  # opens the source: a bad one fails here, before the live table is drawn
     source = itertools.chain([] if first is None else [first], source)
-    _run(d, reader, source, log, rows, tally, show, out_dir, name, photos=images is not None)
+    new = _run(d, session, source, tally, show, out_dir, name)
+    if session.skipped:
+        click.echo(f"{session.skipped} photos of {images} were already in {log}: not read again", err=True)
+    if not session.rows:
+        click.echo(f"no roll read; log {log} not written", err=True)
+        return
+    from diefab.stats.verdict import sequential_line, target_label
+
+    click.echo(sequential_line(tally.result(), target_label(d.target)))
+    click.echo(f"wrote {log}" if new else f"{log} unchanged")
 
 
-def _run(d, reader, source, log, rows, tally, show, out_dir, name, photos: bool) -> None:
+def _run(d, session, source, tally, show, out_dir, name) -> int:
+    """Show the live table while `source` is read; returns the number of rolls read."""
     from rich.live import Live
 
     from diefab.cli.common import console
-    from diefab.stats.rolllog import Roll, append_roll
-    from diefab.stats.verdict import sequential_line, target_label
+    from diefab.stats.verdict import target_label
 
     label = target_label(d.target)
+    reader = session.reader
 
     def view():
-        unread = sum(r.value is None for r in rows)
+        unread = sum(r.value is None for r in session.rows)
         title = f"{d.name} against {label}: {tally.n} rolls read, {unread} unread (frame {reader.frame + 1})"
         return tally_view(tally, label, title)
 
-    offset = max((r.frame for r in rows if r.frame is not None), default=-1) + 1
+    new = 0
     with Live(view(), console=console(), refresh_per_second=4, transient=False) as live:
-        for t, gray in source:
-            seen, roll = reader.feed_rest(gray) if photos else reader.feed(gray)
-            if show and seen is not None:
-                _show(d, reader, gray, seen, out_dir, name)
-            if roll is None:
+        for step in source:
+            if show and step.seen is not None:
+                _show(d, reader, step.gray, step.seen, out_dir, name)
+            if step.roll is None:
                 continue
-            face = None if roll.face is None else d.polyhedron.names[roll.face]
-            row = Roll(f"{t:.3f}", roll.value, face, round(float(roll.confidence), 4), offset + roll.frame)
-            append_roll(log, row)
-            rows.append(row)
-            if roll.value is not None:
-                tally.add(roll.value)
+            new += 1
+            if step.roll.value is not None:
+                tally.add(step.roll.value)
             live.update(view())
         live.update(view())
-    if not rows:
-        click.echo(f"no roll read; log {log} not written", err=True)
-    else:
-        click.echo(sequential_line(tally.result(), label))
-        click.echo(f"wrote {log}")
+    return new
 
 
 def _show(d, reader, gray, seen, out_dir, name) -> None:

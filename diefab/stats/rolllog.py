@@ -20,7 +20,12 @@ The format, shared by the camera reader and the hand tally::
 ``frame``
     The video frame the roll was read on, empty for a hand tally.
 
-Each roll is one ``write`` of one whole line with ``O_APPEND`` followed by
+A line that starts with ``#`` is a comment.  A roll read from a file of its
+own (a photo) is followed by ``# source sha256:DIGEST NAME``: the first 16
+hex digits of the file's SHA-256 and its name, so that a folder read again
+is not counted twice.
+
+Each roll is one ``write`` of its whole lines with ``O_APPEND`` followed by
 ``fsync``: a crash loses at most the roll being written, and a line cut short
 by a crash (no newline at its end) is never read as a roll.  Reopening a log
 for writing removes such a line.
@@ -42,7 +47,7 @@ import io
 import math
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from datetime import UTC, datetime
 from pathlib import Path
 
@@ -57,6 +62,7 @@ __all__ = [
     "MAX_LOG_BYTES",
     "Roll",
     "RollLog",
+    "SOURCE_PREFIX",
     "append_roll",
     "is_roll_log",
     "log_path",
@@ -72,6 +78,8 @@ HEADER = ("time", "value", "face", "confidence", "frame")
 MAX_LOG_BYTES = 100 << 20
 #: A roll log's file name after its name: ``OUT/NAME-rolls.csv``, whether ``read`` or ``roll`` writes it.
 LOG_SUFFIX = "-rolls.csv"
+#: A comment line naming the file the roll above it was read from.
+SOURCE_PREFIX = "# source "
 #: The suffix hand tallies were once saved with; such a log, alone in its folder, is still read and resumed.
 _OLD_SUFFIX = ".rolls.csv"
 
@@ -105,6 +113,8 @@ class Roll:
         Reader's confidence in [0, 1], if read by a machine.
     frame : int or None
         Video frame index, if read from video.
+    source : str or None
+        The file the roll was read from, if any: ``sha256:DIGEST NAME`` (one line).
     """
 
     time: str
@@ -112,6 +122,7 @@ class Roll:
     face: str | None = None
     confidence: float | None = None
     frame: int | None = None
+    source: str | None = None
 
     @classmethod
     def now(cls, value: int, face: str | None = None, confidence: float | None = None, frame: int | None = None):
@@ -132,7 +143,12 @@ class Roll:
             "" if self.confidence is None else f"{self.confidence:.4f}",
             "" if self.frame is None else str(int(self.frame)),
         ]
-        return ",".join(cells) + "\n"
+        line = ",".join(cells) + "\n"
+        if self.source is not None:
+            if not self.source.isprintable():
+                raise StatsError(f"source {self.source!r} must be one line of printable text")
+            line += SOURCE_PREFIX + self.source + "\n"
+        return line
 
 
 @dataclass(frozen=True, eq=False)
@@ -160,6 +176,11 @@ class RollLog:
     def unread(self) -> int:
         """Rolls seen but not read."""
         return sum(r.value is None for r in self.rolls)
+
+    @property
+    def digests(self) -> frozenset[str]:
+        """``sha256:DIGEST`` of every file a roll of the log was read from."""
+        return frozenset(r.source.split()[0] for r in self.rolls if r.source)
 
     def __len__(self) -> int:
         return len(self.rolls)
@@ -226,6 +247,9 @@ def read_log(path: str | Path) -> RollLog:
         raise StatsError(f"{path}:1: not a roll log (its first line must be {','.join(HEADER)})")
     rolls = []
     for i, line in enumerate(lines[1:], start=2):
+        if line.startswith(SOURCE_PREFIX) and rolls and rolls[-1].source is None and line[len(SOURCE_PREFIX) :].strip():
+            rolls[-1] = replace(rolls[-1], source=line[len(SOURCE_PREFIX) :].strip())
+            continue
         if not line.strip() or line.lstrip().startswith("#"):
             continue
         where = f"{path}:{i}"
@@ -255,14 +279,17 @@ def repair_log(path: str | Path) -> int:
         atomic_write(path, ",".join(HEADER) + "\n")
         return 0
     read_log(path)  # refuse to append to a file that is not a roll log
-    with open(path, "rb+") as f:
-        data = f.read()
-        keep = data.rfind(b"\n") + 1
-        if keep < len(data):
-            f.truncate(keep)
-            f.flush()
-            os.fsync(f.fileno())
-        return len(data) - keep
+    try:
+        with open(path, "rb+") as f:
+            data = f.read()
+            keep = data.rfind(b"\n") + 1
+            if keep < len(data):
+                f.truncate(keep)
+                f.flush()
+                os.fsync(f.fileno())
+            return len(data) - keep
+    except OSError as exc:
+        raise StatsError(f"cannot open roll log {path} for writing: {exc.strerror or exc}") from exc
 
 
 def append_roll(path: str | Path, roll: Roll) -> None:
@@ -274,14 +301,17 @@ def append_roll(path: str | Path, roll: Roll) -> None:
     if not path.exists():
         repair_log(path)
     payload = roll.line().encode("utf-8")
-    fd = os.open(path, os.O_WRONLY | os.O_APPEND)
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_APPEND)
+    except OSError as exc:
+        raise StatsError(f"cannot append to roll log {path}: {exc.strerror or exc}") from exc
     try:
         written = os.write(fd, payload)
         if written != len(payload):
             raise StatsError(f"could not append a whole roll to {path} (disk full?)")
         os.fsync(fd)
     except OSError as exc:
-        raise StatsError(f"cannot append to roll log {path}: {exc}") from exc
+        raise StatsError(f"cannot append to roll log {path}: {exc.strerror or exc}") from exc
     finally:
         os.close(fd)
 
@@ -296,14 +326,17 @@ def remove_last_roll(path: str | Path) -> Roll:
     log = read_log(path)
     if not log.rolls:
         raise StatsError(f"roll log {path} has no roll to remove")
-    with open(path, "rb+") as f:
-        data = f.read()
-        lines = data[: data.rfind(b"\n") + 1].split(b"\n")[:-1]
-        while lines:  # drop trailing blank or comment lines, then the last roll's line
-            last = lines.pop().strip()
-            if last and not last.startswith(b"#"):
-                break
-        f.truncate(sum(len(line) + 1 for line in lines))
-        f.flush()
-        os.fsync(f.fileno())
+    try:
+        with open(path, "rb+") as f:
+            data = f.read()
+            lines = data[: data.rfind(b"\n") + 1].split(b"\n")[:-1]
+            while lines:  # drop trailing blank or comment lines, then the last roll's line
+                last = lines.pop().strip()
+                if last and not last.startswith(b"#"):
+                    break
+            f.truncate(sum(len(line) + 1 for line in lines))
+            f.flush()
+            os.fsync(f.fileno())
+    except OSError as exc:
+        raise StatsError(f"cannot remove the last roll of {path}: {exc.strerror or exc}") from exc
     return log.rolls[-1]

@@ -209,6 +209,8 @@ def sequential_line(seq: SequentialResult, label: str) -> str:
     100 rolls: TVD 0.400 to a fair coin, 95 % anytime CI 0.251–0.476: off a fair coin by at least TVD 0.2
     """
     level = f"{100 * (1 - seq.alpha):g} %"
+    if seq.n == 0:
+        return f"no rolls yet: {_still_needed(seq, label, 'likely needed')}"
     head = (
         f"{seq.n:,} rolls: TVD {seq.tvd:.3f} to {label}, {level} anytime CI {seq.tvd_low:.3f}\u2013{seq.tvd_high:.3f}"
     )
