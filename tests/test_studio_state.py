@@ -232,8 +232,34 @@ def test_upload_checks(tmp_path):
     with pytest.raises(DesignError, match="UTF-8"):
         parse_upload(b"\xff\xfe", "bin.toml", tmp_path)
     outside = b'name = "m"\nfamily = "mesh"\nmesh = "/etc/passwd"\nvalues = {}\n'
-    with pytest.raises(DesignError):
+    with pytest.raises(DesignError, match="read only in"):
         parse_upload(outside, "m.toml", tmp_path)
+    missing = outside.replace(b"/etc/passwd", b"/nonexistent/secret.stl")
+    with pytest.raises(DesignError, match="read only in"):  # refused before it is opened: says nothing of the file
+        parse_upload(missing, "m.toml", tmp_path)
+    with pytest.raises(DesignError, match="nested too deeply"):
+        parse_upload(b"a = " + b"[" * 5000, "deep.toml", tmp_path)
+
+
+def test_the_studio_never_replaces_the_files_it_read(tmp_path):
+    from diefab.core.errors import OutputError
+    from diefab.dice.design import design_to_toml, parse_design
+    from diefab.studio.make import write_design, write_solid
+
+    write_solid(load_design("d6"), tmp_path)
+    mesh = tmp_path / "m.stl"
+    (tmp_path / "d6.stl").rename(mesh)
+    text = 'name = "m"\nfamily = "mesh"\nmesh = "m.stl"\ntarget = "1d6"\n'
+    text += "values = {" + ", ".join(f"f{i} = {i}" for i in range(1, 7)) + "}\n"
+    design = parse_design(text, base=tmp_path, within=tmp_path)
+    before = mesh.read_bytes()
+    with pytest.raises(OutputError, match="input"):
+        write_solid(design, tmp_path)  # m.stl, the design's own mesh
+    assert mesh.read_bytes() == before
+    opened = tmp_path / "m.toml"
+    opened.write_text(design_to_toml(design))
+    with pytest.raises(OutputError, match="input"):
+        write_design(design, tmp_path, inputs=(opened,))
 
 
 def test_make_tab_writes_the_net_and_the_solid_with_markers(tmp_path):

@@ -54,8 +54,10 @@ def studio(spec, port, host, no_browser, out_dir) -> None:
         raise click.ClickException("the studio needs NiceGUI: pip install 'diefab[studio]'") from None
     from diefab.studio.app import serve
 
-    click.echo(f"diefab studio: http://{host}:{port}/  (files in {out_dir}; Ctrl-C stops)", err=True)
-    serve(design, out_dir, host=host, port=port, show=not no_browser, target=target)
+    where = f"[{host}]" if ":" in host else host  # an IPv6 address is bracketed in a URL
+    click.echo(f"diefab studio: http://{where}:{port}/  (files in {out_dir}; Ctrl-C stops)", err=True)
+    inputs = (Path(spec),) if spec is not None and Path(spec).is_file() else ()
+    serve(design, out_dir, host=host, port=port, show=not no_browser, target=target, inputs=inputs)
 
 
 def _check_port(host: str, port: int) -> None:

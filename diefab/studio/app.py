@@ -52,9 +52,10 @@ DIE_PAUSE = 0.3
 class Studio:
     """The page of one browser tab."""
 
-    def __init__(self, design: Design, out_dir: Path, target: str | None = None) -> None:
+    def __init__(self, design: Design, out_dir: Path, target: str | None = None, inputs: tuple[Path, ...] = ()) -> None:
         self.session = Session(design)
         self.out_dir = Path(out_dir)
+        self.inputs = tuple(inputs)  # the files the studio was opened on: never replaced
         self.start_target = target
         self.generation = 0
         self.evaluation: dict[str, Any] | None = None
@@ -204,7 +205,7 @@ class Studio:
 
     def save_design(self) -> None:
         try:
-            path = write_design(self.session.design, self.out_dir)
+            path = write_design(self.session.design, self.out_dir, inputs=self.inputs)
         except DiefabError as exc:
             self.show_error(str(exc))
             return
@@ -349,15 +350,20 @@ class Studio:
 
 
 def serve(design: Design, out_dir: Path, *, host: str = "127.0.0.1", port: int = 8080, show: bool = True,
-          target: str | None = None) -> None:  # fmt: skip
-    """Serve the studio until interrupted (blocks)."""
+          target: str | None = None, inputs: tuple[Path, ...] = ()) -> None:  # fmt: skip
+    """Serve the studio until interrupted (blocks); `inputs`: the files it was opened on, never replaced."""
+    import signal
+
     from nicegui import app
 
     out_dir = Path(out_dir)
+    if hasattr(signal, "SIGHUP") and signal.getsignal(signal.SIGHUP) is not signal.SIG_IGN:
+        # the server stops gracefully on SIGTERM and SIGINT, which it handles itself; a hang-up does the same
+        signal.signal(signal.SIGHUP, lambda signum, frame: signal.raise_signal(signal.SIGTERM))
 
     @ui.page("/")
     def index() -> None:
-        Studio(design, out_dir, target).build()
+        Studio(design, out_dir, target, inputs).build()
 
     @app.get("/healthz")
     def healthz() -> dict:

@@ -66,7 +66,7 @@ class CameraPanel(JobPanel):
         """The reader's source from the form: a camera number, or a path that must be inside the output folder."""
         kind, where = self.source.value, (self.where.value or "").strip()
         if kind == "camera":
-            if not where.isdigit() or int(where) > 99:
+            if not (where.isascii() and where.isdigit()) or int(where) > 99:
                 raise DiefabError(f"camera number {where!r}: give 0 (the first camera) to 99")
             return {"camera": int(where)}
         root = self.studio.out_dir.resolve()

@@ -27,19 +27,7 @@ def parse_upload(data: bytes, name: str, folder: Path) -> Design:
         text = data.decode("utf-8")
     except UnicodeDecodeError:
         raise DesignError(f"{name} is not UTF-8 text") from None
-    design = parse_design(text, source=name, base=folder)
-    check_reads(design, name, folder)
+    design = parse_design(text, source=name, base=folder, within=folder)
     _ = design.polyhedron  # checks the geometry now
     design.check_stable(-math.inf)
     return design
-
-
-def check_reads(design: Design, source: str, folder: Path) -> None:
-    """Refuse a design that would make the studio read a file (a mesh, an SVG label) outside `folder`."""
-    root = Path(folder).resolve()
-    files = [design.mesh] if design.mesh is not None else []
-    files += [Path(t[4:].strip()) for t in design.labels.values() if t.startswith("svg:")]
-    for f in files:
-        full = Path(f).resolve()
-        if root not in full.parents:
-            raise DesignError(f"{source}: the studio reads files only in {folder}, not {f}")

@@ -116,7 +116,19 @@ def _kill_if_alive(process, grace: float = 2.0) -> None:
         process.join(1.0)
 
 
+def _quiet_stops() -> None:
+    """In a worker: a stop signal (the page cancelling it, the server stopping) ends it quietly.
+
+    The parent, the ``diefab`` command, says "interrupted" once for all.
+    """
+    from diefab.core.stopping import install
+
+    install()  # raises KeyboardInterrupt, which the worker catches, instead of printing a line and exiting
+
+
 def _run(func, args, q) -> None:
+    _quiet_stops()
+
     def report(kind: str, *data: Any) -> None:
         q.put((kind, *data))
 
@@ -129,8 +141,11 @@ def _run(func, args, q) -> None:
     except Exception as exc:  # a bug in the worker: one line in the page, never a traceback
         q.put(("error", f"internal error: {type(exc).__name__}: {exc}"))
     finally:
-        q.close()
-        q.join_thread()
+        try:
+            q.close()
+            q.join_thread()
+        except KeyboardInterrupt:  # stopped again while the last message goes: nobody waits for it
+            pass
 
 
 class Evaluator:
@@ -174,6 +189,7 @@ class Evaluator:
 
 
 def _evaluate_forever(inbox, outbox) -> None:
+    _quiet_stops()
     from diefab.studio.state import evaluate
 
     try:
@@ -185,7 +201,7 @@ def _evaluate_forever(inbox, outbox) -> None:
                 outbox.put((number, "error", str(exc)))
             except Exception as exc:  # a bug: one line in the page, never a traceback
                 outbox.put((number, "error", f"internal error: {type(exc).__name__}: {exc}"))
-    except KeyboardInterrupt:  # the server was stopped with Ctrl-C
+    except KeyboardInterrupt:  # the server was stopped, or the page closed
         pass
 
 
@@ -273,23 +289,21 @@ def read_job(design, source: dict, settle: int, min_confidence: float, fov: floa
 
     import cv2
 
-    from diefab.camera.reader import RollReader, frames
+    from diefab.camera.reader import RollReader
     from diefab.camera.render import draw_detection
+    from diefab.camera.session import LogReading
     from diefab.core.files import hold_lock
-    from diefab.stats.rolllog import Roll, append_roll, read_log
 
     reader = RollReader(design, settle=settle, min_confidence=min_confidence, fov=fov)
     hold_lock(log_path, f"roll log {log_path}")  # one writer per log, until the worker ends
-    rows = read_log(log_path).rolls if log_path.exists() else []
-    offset = max((r.frame for r in rows if r.frame is not None), default=-1) + 1
+    session = LogReading(reader, log_path)
     photos = "images" in source
-    names = design.polyhedron.names
     shown, count = 0.0, 0
-    for t, gray in frames(**source):
-        seen, roll = reader.feed_rest(gray) if photos else reader.feed(gray)
+    for step in session.read(**source):
+        seen, roll = step.seen, step.roll
         now = time.monotonic()
         if seen is not None and (photos or roll is not None or now - shown >= PREVIEW_EVERY):
-            image = draw_detection(gray, seen, design, reader.layout, reader.camera)
+            image = draw_detection(step.gray, seen, design, reader.layout, reader.camera)
             scale = PREVIEW_WIDTH / image.shape[1]
             small = cv2.resize(image, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
             ok, data = cv2.imencode(".jpg", small, [cv2.IMWRITE_JPEG_QUALITY, 80])
@@ -299,8 +313,8 @@ def read_job(design, source: dict, settle: int, min_confidence: float, fov: floa
         report("progress", reader.frame + 1, 0)
         if roll is None:
             continue
-        face = None if roll.face is None else names[roll.face]
-        append_roll(log_path, Roll(f"{t:.3f}", roll.value, face, round(float(roll.confidence), 4), offset + roll.frame))
-        report("roll", float(t), roll.value, face, float(roll.confidence))
+        report("roll", step.time, roll.value, roll.face, float(roll.confidence))
         count += 1
+    if session.skipped:
+        report("note", f"{session.skipped} photos were already in the log: not read again")
     return count

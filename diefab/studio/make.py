@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from pathlib import Path
 
 from diefab.core.errors import FabricationError, OutputError
@@ -17,10 +18,19 @@ def _inside(out_dir: Path, path: Path) -> Path:
     return Path(path)
 
 
+def design_files(design: Design) -> list[Path]:
+    """The files `design` reads (its mesh, its SVG symbols)."""
+    files = [Path(design.mesh)] if design.mesh is not None else []
+    return files + [Path(t[4:].strip()) for t in design.labels.values() if t.startswith("svg:")]
+
+
 def write_net(design: Design, out_dir: Path, *, page: str = "A4", formats: tuple[str, ...] = ("svg", "pdf"),
               copies: int = 1, mark: str = "bar", pips: bool = False, face_names: bool = False,
-              tab_width: float = 5.0, markers: bool = False) -> list[Path]:  # fmt: skip
-    """Write the paper net of `design` (as ``diefab net``, with ``--markers`` if `markers`); the files written."""
+              tab_width: float = 5.0, markers: bool = False, inputs: Iterable[Path] = ()) -> list[Path]:  # fmt: skip
+    """Write the paper net of `design` (as ``diefab net``, with ``--markers`` if `markers`); the files written.
+
+    Every writer here refuses to replace `inputs` (the files the studio was opened on) or the design's own files.
+    """
     from diefab.core.files import ensure_dir, output_path, write_files
     from diefab.fabricate.net import design_net, marked_net
     from diefab.made.pages import parse_page
@@ -30,7 +40,7 @@ def write_net(design: Design, out_dir: Path, *, page: str = "A4", formats: tuple
     rendered, _ = marked_net(design, net, formats, markers=markers, face_names=face_names, copies=copies, mark=mark,
                              pips=pips)  # fmt: skip
     paths = {k: _inside(out_dir, output_path(out_dir, design.name, f"-net.{k}")) for k in formats}
-    return write_files({paths[k]: rendered[k] for k in formats})
+    return write_files({paths[k]: rendered[k] for k in formats}, inputs=[*design_files(design), *inputs])
 
 
 def write_solid(
@@ -43,6 +53,7 @@ def write_solid(
     emboss: bool = False,
     inlay: bool = False,
     markers: bool = False,
+    inputs: Iterable[Path] = (),
 ) -> tuple[list[Path], dict]:
     """Write the printable solid of `design` (as ``diefab stl``); the files written and the solid's report.
 
@@ -65,16 +76,17 @@ def write_solid(
         payloads[path] = stl_bytes(solid) if k == "stl" else threemf_bytes(solid)
     if inlay:
         payloads[_inside(out_dir, output_path(out_dir, design.name, "-inlay.stl"))] = inlay_stl_bytes(solid)
-    return write_files(payloads), dict(solid.report)
+    return write_files(payloads, inputs=[*design_files(design), *inputs]), dict(solid.report)
 
 
-def write_design(design: Design, out_dir: Path) -> Path:
+def write_design(design: Design, out_dir: Path, *, inputs: Iterable[Path] = ()) -> Path:
     """Write `design` as a TOML design file into `out_dir`."""
     from diefab.core.files import ensure_dir, output_path, write_files
 
     ensure_dir(out_dir)
     path = _inside(out_dir, output_path(out_dir, design.name, ".toml"))
-    return write_files({path: design_to_toml(design, comment="saved by diefab studio")})[0]
+    text = design_to_toml(design, comment="saved by diefab studio")
+    return write_files({path: text}, inputs=[*design_files(design), *inputs])[0]
 
 
 def net_faces(design: Design, page: str = "A4"):

@@ -120,7 +120,9 @@ class MakePanel:
         """Run a writer of :mod:`diefab.studio.make` in a thread and download what it wrote."""
         self.note.set_text(f"making the {what} ...")
         try:
-            written = await run.io_bound(writer, self.studio.session.design, self.studio.out_dir, **options)
+            written = await run.io_bound(
+                writer, self.studio.session.design, self.studio.out_dir, inputs=self.studio.inputs, **options
+            )
         except DiefabError as exc:
             message = str(exc)
         except Exception as exc:  # a bug: one line, the server keeps running

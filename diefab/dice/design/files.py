@@ -159,12 +159,20 @@ def load_design(spec: str | Path, made: str | None = None) -> Design:
     return parse_design(template_path(name).read_text(encoding="utf-8"), source=f"template {name}")
 
 
-def parse_design(content: str, *, source: str = "<string>", base: Path | None = None) -> Design:
-    """Parse a design from TOML text; errors name `source` and the line."""
+def parse_design(
+    content: str, *, source: str = "<string>", base: Path | None = None, within: Path | None = None
+) -> Design:
+    """Parse a design from TOML text; errors name `source` and the line.
+
+    `base` is the folder a mesh or SVG symbol file is found in; `within`, when given, a folder outside which
+    no such file is read (the design is refused before any file is opened).
+    """
     try:
         data = tomllib.loads(content)
     except tomllib.TOMLDecodeError as exc:
         raise DesignError(f"{source}: malformed TOML: {exc}") from exc
+    except RecursionError:
+        raise DesignError(f"{source}: malformed TOML: nested too deeply") from None
     try:
         check_design_data(data)
     except DesignError as exc:
@@ -199,6 +207,8 @@ def parse_design(content: str, *, source: str = "<string>", base: Path | None = 
             face: f"svg:{base / text[4:].strip()}" if isinstance(text, str) and text.startswith("svg:") else text
             for face, text in data["labels"].items()
         }
+    if within is not None:
+        _check_within(kwargs, source, within)
     if "transitional" in data:
         if not isinstance(data["transitional"], list):
             raise DesignError(f"{source}: transitional must be a list of face names")
@@ -209,6 +219,18 @@ def parse_design(content: str, *, source: str = "<string>", base: Path | None = 
         raise DesignError(f"{source}: {exc}") from exc
     except (TypeError, ValueError) as exc:
         raise DesignError(f"{source}: {exc}") from exc
+
+
+def _check_within(kwargs: dict, source: str, folder: Path) -> None:
+    """Refuse design arguments that name a file (a mesh, an SVG symbol) outside `folder`."""
+    labels = kwargs.get("labels")
+    files = [kwargs["mesh"]] if "mesh" in kwargs else []
+    if isinstance(labels, dict):
+        files += [Path(t[4:].strip()) for t in labels.values() if isinstance(t, str) and t.startswith("svg:")]
+    root = Path(folder).resolve()
+    for f in files:
+        if root not in Path(f).resolve().parents:
+            raise DesignError(f"{source}: files are read only in {folder}, not {f}")
 
 
 def design_to_toml(design: Design, *, comment: str = "") -> str:
