@@ -135,8 +135,8 @@ def test_tally_add_counts_a_value_and_refuses_a_foreign_one():
         tally.add(7)
 
 
-def _roll_in_a_terminal(folder, keys: bytes, close: bool) -> int:
-    """Run ``diefab roll d6`` in a pseudo-terminal, type `keys`, then quit or close the terminal; its exit status."""
+def _roll_in_a_terminal(folder, keys: bytes, close: bool, end: bytes = b"q") -> int:
+    """Run ``diefab roll d6`` in a pseudo-terminal, type `keys`, then `end` or close the terminal; its exit status."""
     import pty
     import select
     import sys
@@ -154,7 +154,7 @@ def _roll_in_a_terminal(folder, keys: bytes, close: bool) -> int:
         while b"quit:" not in shown and time.monotonic() < deadline:  # the app is drawn
             if select.select([fd], [], [], 0.1)[0]:
                 shown += os.read(fd, 65536)
-        for key in keys + (b"" if close else b"q"):
+        for key in keys + (b"" if close else end):
             os.write(fd, bytes([key]))
             time.sleep(0.3)
             try:
@@ -175,11 +175,14 @@ def _roll_in_a_terminal(folder, keys: bytes, close: bool) -> int:
 
 
 @pytest.mark.skipif(not hasattr(os, "fork"), reason="pseudo-terminals")
-@pytest.mark.parametrize("close", [False, True], ids=["quit", "terminal-closed"])
-def test_roll_in_a_terminal_keeps_every_roll_and_leaves_no_lock_file(tmp_path, close):
+@pytest.mark.parametrize(
+    ("close", "end", "code"), [(False, b"q", 0), (False, b"\x03", 130), (True, b"", 130)],
+    ids=["quit", "ctrl-c", "terminal-closed"],
+)  # fmt: skip
+def test_roll_in_a_terminal_keeps_every_roll_and_leaves_no_lock_file(tmp_path, close, end, code):
     pytest.importorskip("textual")
-    status = _roll_in_a_terminal(tmp_path, b"6613", close)
-    assert status == (130 if close else 0)
+    status = _roll_in_a_terminal(tmp_path, b"6613", close, end)
+    assert status == code
     assert read_log(tmp_path / "d6-rolls.csv").values.tolist() == [6, 6, 1, 3]
     assert [p.name for p in tmp_path.iterdir()] == ["d6-rolls.csv"]  # the lock file went with the lock
 
@@ -213,6 +216,44 @@ def test_roll_app_records_every_key_in_the_log(tmp_path):
     assert "3 rolls" in verdict and "fair d6" in verdict
     resumed = Tally(tally.values, tally.target, 0.05, rolls=read_log(path).values)
     assert resumed.counts.tolist() == tally.counts.tolist()
+
+
+def test_a_roll_the_log_cannot_take_is_not_counted(tmp_path):
+    path = tmp_path / "d6-rolls.csv"
+    repair_log(path)
+    t = parse_target("uniform:6")
+    tally = Tally(t.values, t.probabilities, 0.05)
+
+    async def drive():
+        from diefab.cli.roll import roll_app
+
+        app = roll_app(tally, path, "d6", "a fair d6")
+        async with app.run_test(size=(110, 30)) as pilot:
+            await pilot.press("2")
+            path.unlink()
+            path.mkdir()  # the log is now a folder: nothing can be appended
+            await pilot.press("3", "backspace")
+            await pilot.pause()
+            text = str(app.query_one("#status").render())
+            await pilot.press("q")
+        return text
+
+    status = asyncio.run(drive())
+    assert status.startswith("not recorded:")
+    assert tally.counts.tolist() == [0, 1, 0, 0, 0, 0]
+
+
+def test_roll_with_its_input_closed_is_one_line(tmp_path):
+    import subprocess
+    import sys
+
+    pytest.importorskip("textual")
+    done = subprocess.run(
+        [sys.executable, "-m", "diefab", "roll", "d6", "--out", str(tmp_path)],
+        capture_output=True, text=True, preexec_fn=lambda: os.close(0), timeout=120,
+    )  # fmt: skip
+    assert done.returncode == 2
+    assert done.stderr.count("\n") == 1 and "terminal" in done.stderr
 
 
 def test_roll_app_shows_names_and_paths_as_they_are(tmp_path):

@@ -37,20 +37,27 @@ def roll(design, params, target, out, name, delta) -> None:
     d = get_design(design, params, target)
     path = log_path(ensure_dir(out), name or d.name)
     hold_lock(path, f"roll log {path}")  # one writer per log, until the command ends
-    if not (sys.stdin.isatty() and sys.stdout.isatty()):
+    if not all(stream is not None and stream.isatty() for stream in (sys.stdin, sys.stdout)):
         raise StatsError("diefab roll needs a terminal (it reads one key per roll)")
     repair_log(path)
     tally = Tally(d.support, d.target_distribution.aligned(d.support), delta, read_log(path).values)
     label = target_label(d.target)
     app = roll_app(tally, path, f"{d.name} against {label}", label)
     app.run()
+    if app.return_code == INTERRUPTED:
+        raise KeyboardInterrupt  # Ctrl-C, which the app reads as a key: every roll is already in the log
     click.echo(sequential_line(tally.result(), label))
     click.echo(f"roll log: {path} ({tally.n} rolls)")
+
+
+#: The app's return code after Ctrl-C.
+INTERRUPTED = 130
 
 
 def roll_app(tally, path: Path, title: str, label: str):
     """The textual app of a tally recorded in the roll log at `path`."""
     from textual.app import App, ComposeResult
+    from textual.binding import Binding
     from textual.widgets import Footer, Static
 
     from diefab.core.errors import DiefabError
@@ -64,6 +71,7 @@ def roll_app(tally, path: Path, title: str, label: str):
 
         CSS = "Static { padding: 0 1; } #verdict { text-style: bold; }"
         TITLE = "diefab roll"
+        BINDINGS = [Binding("ctrl+c", "interrupt", "stop", show=False, priority=True)]
 
         def __init__(self) -> None:
             super().__init__()
@@ -79,6 +87,9 @@ def roll_app(tally, path: Path, title: str, label: str):
             yield Static(f"keys: {keys}   undo: {'/'.join(UNDO_KEYS)}   quit: {'/'.join(QUIT_KEYS)}", id="keys",
                          markup=False)  # fmt: skip
             yield Footer()
+
+        def action_interrupt(self) -> None:
+            self.exit(return_code=INTERRUPTED)
 
         def on_mount(self) -> None:
             self.refresh_view()
