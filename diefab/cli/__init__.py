@@ -129,7 +129,10 @@ def _main(argv: list[str] | None) -> None:
     from diefab.core.stopping import check_stop, stop_requested
 
     try:
-        rv = cli.main(args=argv, prog_name="diefab", standalone_mode=False)
+        # the command is invoked as click's ``main`` would, but a stop is not turned into click's ``Abort`` after a
+        # blank line on stderr: it ends in the one line of :func:`_interrupted`
+        with cli.make_context("diefab", list(sys.argv[1:] if argv is None else argv)) as ctx:
+            rv = cli.invoke(ctx)
         if not rv:  # a command that succeeded after a stop whose exception something swallowed: still a stop
             check_stop()
         sys.stdout.flush()
@@ -142,6 +145,13 @@ def _main(argv: list[str] | None) -> None:
     sys.exit(rv if isinstance(rv, int) else 0)
 
 
+def _usage(exc: click.ClickException) -> None:
+    ctx = getattr(exc, "ctx", None)
+    command = ctx.command_path.removeprefix("diefab").strip() if ctx is not None else ""
+    where = f"{command}: " if command else ""
+    error(f"{where}{exc.format_message()}")
+
+
 def _fail(exc: BaseException) -> None:
     try:
         raise exc
@@ -152,11 +162,13 @@ def _fail(exc: BaseException) -> None:
         _interrupted()
     except click.exceptions.Exit as exc:
         sys.exit(exc.exit_code)
+    except click.UsageError as exc:
+        if type(exc).__name__ == "NoArgsIsHelpError" and exc.ctx is not None:  # a bare ``diefab``: its help
+            click.echo(exc.ctx.get_help())
+            sys.exit(0)
+        _usage(exc)
     except click.ClickException as exc:
-        ctx = getattr(exc, "ctx", None)
-        command = ctx.command_path.removeprefix("diefab").strip() if ctx is not None else ""
-        where = f"{command}: " if command else ""
-        error(f"{where}{exc.format_message()}")
+        _usage(exc)
     except DiefabError as exc:
         error(str(exc))
     except OSError as exc:  # the system refused (a full disk under stdout, an I/O error), not a bug
