@@ -115,3 +115,24 @@ def test_taper_makes_the_bottom_of_a_cuboid_likelier_than_its_top():
 def test_bad_parameters_are_design_errors(name, params, message):
     with pytest.raises(DesignError, match=message):
         family(name).polyhedron(params)
+
+
+@pytest.mark.parametrize("scale", [0.01, 1.0, 100.0, 1e6])
+def test_a_convex_die_lands_the_same_whatever_the_units_of_its_vertices(scale):
+    # the throw is defined in model units, so a convex design is brought to the model size (the longest side of
+    # its box 2) whatever its vertices' units; size_mm alone gives its real size
+    from diefab.models.probabilities import face_probabilities
+
+    box = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1.2, 1.2)])
+    faces = ((0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3))
+
+    def die(points):
+        return Design("box", "convex", vertices=tuple(map(tuple, points.tolist())), faces=faces, size_mm=24.0,
+                      values={f"f{k}": k for k in range(1, 7)}, target="uniform:6")  # fmt: skip
+
+    reference, scaled = die(box / 1.2), die(box * scale)
+    assert np.ptp(scaled.polyhedron.vertices, axis=0).max() == pytest.approx(2.0)
+    np.testing.assert_allclose(scaled.polyhedron.vertices, reference.polyhedron.vertices, atol=1e-12)
+    assert scaled.mm_per_unit == pytest.approx(reference.mm_per_unit)
+    for model in ("fast", "basins"):
+        np.testing.assert_allclose(face_probabilities(scaled, model), face_probabilities(reference, model), atol=1e-9)

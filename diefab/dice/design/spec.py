@@ -102,7 +102,9 @@ class Design:
     physics : mapping
         Simulation settings stored with the design (see :mod:`diefab.physics.simulate`).
     vertices, faces, mesh
-        Geometry of ``convex`` and ``mesh`` designs.
+        Geometry of ``convex`` and ``mesh`` designs, in any units: the die is
+        scaled so that its bounding box's longest side is 2 model units
+        (``size_mm`` gives its real size).
     transitional : sequence of str
         Faces named as faces the die cannot rest on (it rolls off them).
         They carry no value.  A face with no value is transitional whether
@@ -111,8 +113,8 @@ class Design:
     center_of_mass : (3,) float, optional
         The real body's centre of mass (a weighted die, a print with an
         insert), used by every model and the simulation instead of the
-        fill's.  Model units, the design's coordinates (a ``mesh`` design:
-        the mesh file's units and coordinates).  It must lie inside the die.
+        fill's.  In the design's own coordinates: a ``convex`` design's
+        vertices', a ``mesh`` design's file's.  It must lie inside the die.
     inertia : (3, 3) float, optional
         The real body's inertia tensor about its centre of mass, per unit
         mass (same units, squared).  Without it the fill's inertia about
@@ -227,9 +229,26 @@ class Design:
 
     @cached_property
     def _file_scale(self) -> float:
-        """Model units per unit of the design's own coordinates (a mesh file's units; 1 otherwise)."""
+        """Model units per unit of the design's own coordinates.
+
+        A ``mesh`` file and a ``convex`` design's vertices are scaled so that the longest side of their
+        bounding box is 2 model units: the throw is defined in model units (the gem's girdle spans 2), so a
+        die's landing cannot depend on the units its vertices are written in.  Vertices already of that
+        size are used as written; a family's own parameters define its model units.
+        """
         mesh = self._file_mesh
-        return 1.0 if mesh is None else 2.0 / float(np.ptp(mesh.vertices, axis=0).max())
+        if mesh is not None:
+            return 2.0 / float(np.ptp(mesh.vertices, axis=0).max())
+        if self.family != "convex":
+            return 1.0
+        try:
+            points = np.array(self.vertices, dtype=float)
+        except (TypeError, ValueError):
+            return 1.0  # refused, naming what is wrong, when the polyhedron is built
+        extent = float(np.ptp(points, axis=0).max()) if points.ndim == 2 and len(points) else math.nan
+        if not (math.isfinite(extent) and extent > 0) or abs(extent - 2.0) <= 1e-9:
+            return 1.0
+        return 2.0 / extent
 
     @cached_property
     def body_mesh(self) -> ClosedMesh | None:
@@ -248,7 +267,7 @@ class Design:
                 return self._listed_polyhedron()
             mm = MESH_MERGE_MM if self.merge_tolerance_mm is None and self.family == "mesh" else self.merge_tolerance_mm
             mesh = self.family == "mesh"
-            points = self.body_mesh.vertices if mesh else np.array(self.vertices, dtype=float)
+            points = self.body_mesh.vertices if mesh else np.array(self.vertices, dtype=float) * self._file_scale
             if mm is None:
                 return Polyhedron.from_points(points, strict=not mesh)
             # the tolerance is in mm, and what size_mm measures depends on the merged faces: start from the
@@ -265,7 +284,7 @@ class Design:
     def _listed_polyhedron(self) -> Polyhedron:
         """The listed faces, each planar within ``merge_tolerance_mm`` (refused beyond, naming face and distance)."""
         mm = tol.FACE_FLATNESS_MM if self.merge_tolerance_mm is None else float(self.merge_tolerance_mm)
-        vertices = np.array(self.vertices, dtype=float)
+        vertices = np.array(self.vertices, dtype=float) * self._file_scale
         exact = Polyhedron(vertices, self.faces, flatness=np.inf)  # topology and planes, flatness checked below
         mm_per_unit = self.size_mm / default_length(exact)[0]
         flat_mm = exact.face_flatness * mm_per_unit
