@@ -43,6 +43,8 @@ INFO_TEXT = 3.0
 ROW = 4.4
 #: Free border between a face's edge and its label, mm.
 FACE_MARGIN = 1.0
+#: Smallest label printed on paper (cap height), mm: a label that fits only smaller is refused, never left out.
+MIN_FACE_TEXT = 0.5
 #: A value label is at most this fraction of the diameter of the face's inscribed circle high
 #: (about what commercial dice print: a 16 mm d6 carries 8 mm numbers).
 FACE_TEXT_FRACTION = 0.5
@@ -236,6 +238,17 @@ def _draw_footer(sheet: Sheet, plan: FooterPlan, page, font: Font) -> None:
 # the die's texts, on the first copy
 
 
+def check_text_fits(text: str, face: str, height: float) -> None:
+    """Refuse a label that fits `face` only below :data:`MIN_FACE_TEXT` high (`height`, mm)."""
+    from diefab.core.errors import FabricationError
+
+    if not height > MIN_FACE_TEXT:
+        raise FabricationError(
+            f"label {text!r} does not fit on face {face}: at most {max(height, 0.0):.2f} mm high, below the "
+            f"smallest printed text {MIN_FACE_TEXT:g} mm (use a larger --size or a shorter label)"
+        )
+
+
 def _face_map(net: Net, k: int, axis: np.ndarray):
     """Origin and page images of the face's die frame (u, v) for face k of `net`."""
     poly = net.poly
@@ -367,6 +380,9 @@ def _die_texts(net: Net, labels: dict[str, str], axis, *, face_names, mark, pips
             fits[name] = (text, shape, region, (origin, xa, ya), fit_label(region, shape, largest))
         else:
             fits[name] = (name, None, region, (origin, xa, ya), None)
+    for name, (text, shape, region, frame, fit) in fits.items():
+        if shape is not None:
+            check_text_fits(text, name, fit[0])
     value_heights = [f[4][0] for n, f in fits.items() if f[1] is not None and n in values]
     common = min(value_heights) if value_heights else math.inf
     for name, (text, shape, region, frame, fit) in fits.items():
@@ -375,8 +391,6 @@ def _die_texts(net: Net, labels: dict[str, str], axis, *, face_names, mark, pips
             height, cx, cy = fit
             if name in values:
                 height = min(height, common)
-            if height <= 0.5:
-                continue
             used = _scaled(shape, height, cx, cy)
             out.append(Text(text, "face", _framed(used, *frame), name, height))
         if face_names:

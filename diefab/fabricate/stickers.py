@@ -16,7 +16,7 @@ import numpy as np
 from diefab.core.errors import FabricationError
 from diefab.dice.design import Design, design_axis
 from diefab.dice.markers import marker_cells, marker_layout
-from diefab.fabricate.sheet import FACE_MARGIN, MAX_FACE_TEXT, Sheet, Text
+from diefab.fabricate.sheet import FACE_MARGIN, MAX_FACE_TEXT, Sheet, Text, check_text_fits
 from diefab.made.inlays import cell_outline
 from diefab.made.labels import face_frame, fit_label, label_shape
 from diefab.made.pages import parse_page
@@ -88,9 +88,9 @@ def sticker_sheets(design: Design, *, size_mm: float | None = None, page: str = 
 
             flipped = affinity.scale(shape, 1.0, -1.0, origin=(0, 0))  # page y points down
             h_text, cx, cy = fit_label(region, flipped, largest)
-            if h_text > 0.5:
-                placed = affinity.translate(affinity.scale(flipped, h_text, h_text, origin=(0, 0)), cx, cy)
-                sheet.texts.append(Text(text, "face", placed, name, h_text))
+            check_text_fits(text, name, h_text)
+            placed = affinity.translate(affinity.scale(flipped, h_text, h_text, origin=(0, 0)), cx, cy)
+            sheet.texts.append(Text(text, "face", placed, name, h_text))
         x += w + GAP
         shelf = max(shelf, h)
     for sheet in sheets:
