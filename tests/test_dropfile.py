@@ -88,6 +88,11 @@ def test_a_drop_file_of_another_run_or_not_a_drop_file_is_refused_in_one_line(ru
     with open(tmp_path / "one.npz", "wb") as fh:  # one array, not an archive
         np.save(fh, np.zeros(3))
     assert "is not a diefab drop file" in bad(*VALIDATE, "--sims", "50", "--checkpoint", tmp_path / "one.npz")
+    hurt = bytearray(path.read_bytes())  # a disk error inside the compressed outcomes
+    for at in range(len(hurt) // 3, len(hurt) // 2, 7):
+        hurt[at : at + 3] = b"\x00\xff\x13"
+    (tmp_path / "hurt.npz").write_bytes(bytes(hurt))
+    assert "is not a diefab drop file" in bad(*VALIDATE, "--sims", "50", "--checkpoint", tmp_path / "hurt.npz")
     assert "must end in .npz" in bad(*VALIDATE, "--sims", "50", "--checkpoint", tmp_path / "d6.json")
     assert "not --sensitivity" in bad(*VALIDATE, "--sims", "50", "--sensitivity", "--checkpoint", path)
 

@@ -297,6 +297,11 @@ def physics_file_option(func):
     )(func)
 
 
+def profile_inputs(profile: str | None) -> list[Path]:
+    """A ``--physics`` profile given as a file (none for a shipped profile's name): no output may replace it."""
+    return [Path(profile)] if profile is not None and Path(profile).is_file() else []
+
+
 def physics_settings(design: Design, profile: str | None = None, **overrides):
     """The design's [physics] table, then `profile` (a name or file), then the command-line `overrides`."""
     from diefab.physics.profiles import load_profile

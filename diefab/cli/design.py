@@ -24,6 +24,7 @@ from diefab.cli.common import (
     named_folder,
     out_option,
     physics_file_option,
+    profile_inputs,
     report_option,
     seed_option,
 )
@@ -160,9 +161,10 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
     outputs = [] if report_file is None else [report_file]
     if name is not None:
         outputs.append(output_path(out_dir, name, ".toml"))
-    else:
-        hold_lock(Path(out_dir) / f"design-{_slug(target)}", f"design {target} into {out_dir}")
-    check_outputs(outputs)
+    # the target too, named or not: a run without --name and one naming its default name exclude each other
+    hold_lock(Path(out_dir) / f"design-{_slug(target)}", f"design {target} into {out_dir}")
+    inputs = profile_inputs(physics_profile)
+    check_outputs(outputs, inputs)
     store = None if checkpoint is None else _store(checkpoint)
     err = console(stderr=True)
     say = (lambda text: err.print(text, markup=False)) if not as_json else None
@@ -189,6 +191,7 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
     how += f" --physics {shlex.quote(str(physics_profile))}" if physics_profile else ""
     how += (" --robust" if robust else "") + (" --flat-faces" if flat_faces else "")
     how += (f" --family {family_name}" if family_name != "auto" else "") + (f" --faces {faces}" if faces else "")
+    # written before the closing check, which may take long: an interrupted check keeps the die it found
     path = atomic_write(
         output_path(out_dir, d.name, ".toml"),
         design_to_toml(
@@ -196,8 +199,9 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
             comment=f"Written by: diefab design {target} --model {model} --seed {seed} --max-drops {max_drops}"
             + (f" --fill {made.kind}" if made.kind != "solid" else "")
             + how,
-        ),  # fmt: skip
-    )
+        ),
+        inputs=inputs,
+    )  # fmt: skip
     aligned = goal.aligned(d.support)
     validated, verdict, agreement = None, None, None
     if validate_sims:
@@ -263,7 +267,7 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
         from diefab.fabricate.report import design_report, render_report
 
         page = render_report(design_report(d, found.predicted, found.model, validated))
-        report["report"] = str(atomic_write(report_file, page.encode("utf-8"), inputs=[path]))
+        report["report"] = str(atomic_write(report_file, page.encode("utf-8"), inputs=[*inputs, path]))
     if as_json:
         emit_json(report)
     else:

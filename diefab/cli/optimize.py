@@ -27,6 +27,7 @@ from diefab.cli.common import (
     physics_file_option,
     physics_settings,
     pop_fill,
+    profile_inputs,
     refuse_options,
     run_logged,
     seed_option,
@@ -102,7 +103,7 @@ def optimize(ctx, design, params, model, target, seed, min_margin, starts, free,
     names = free_parameters(d, free)
     ensure_dir(out_dir)
     name = name or f"{d.name}-{model}-opt"
-    inputs = design_inputs(design, d)
+    inputs = design_inputs(design, d) + profile_inputs(physics_profile)
     path = output_path(out_dir, name, ".toml")
     check_outputs([path], inputs)
     note_fast_fill(d, model, d.fill.kind)
@@ -237,7 +238,7 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
     d.check_stable(0.0)
     if method is None and resume is None:
         method = "correction" if robust else "cma"
-    inputs = design_inputs(design, d)
+    inputs = design_inputs(design, d) + profile_inputs(physics_profile)
     warning = None
     budget_given = ctx.get_parameter_source("budget").name == "COMMANDLINE"
     if resume is not None:

@@ -23,6 +23,7 @@ from diefab.cli.common import (
     physics_options,
     physics_settings,
     pop_fill,
+    profile_inputs,
     refuse_options,
     report_option,
     seed_option,
@@ -82,7 +83,7 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
         refuse_options(ctx, ["workers"], "does not apply with --scheduler (the cluster's workers run the drops)")
     made = fill.get("fill_kind")  # a target's name made of card or printed takes the die designed so
     d = apply_fill(get_design(design, params, target, made), **fill)
-    inputs = design_inputs(design, d, made)  # no output may replace them
+    inputs = design_inputs(design, d, made) + profile_inputs(physics_profile)  # no output may replace them
     settings = physics_settings(d, physics_profile, **physics)
     real = None
     if rolls_file is not None:  # read before any drop: a bad log is refused at once

@@ -380,7 +380,7 @@ def _die_texts(net: Net, labels: dict[str, str], axis, *, face_names, mark, pips
             fits[name] = (text, shape, region, (origin, xa, ya), fit_label(region, shape, largest))
         else:
             fits[name] = (name, None, region, (origin, xa, ya), None)
-    for name, (text, shape, region, frame, fit) in fits.items():
+    for name, (text, shape, *_, fit) in fits.items():
         if shape is not None:
             check_text_fits(text, name, fit[0])
     value_heights = [f[4][0] for n, f in fits.items() if f[1] is not None and n in values]

@@ -31,6 +31,7 @@ import hashlib
 import io
 import json
 import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -139,7 +140,7 @@ class DropFile:
                     return int(fmt), str(held_identity), np.array(held)
         except PhysicsError:
             raise
-        except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile):
+        except (OSError, ValueError, KeyError, TypeError, EOFError, zipfile.BadZipFile, zlib.error):
             raise PhysicsError(f"drop file {self.path} is not a diefab drop file (a NumPy archive of its format, "
                                "identity and outcomes): remove it or name another") from None  # fmt: skip
 
