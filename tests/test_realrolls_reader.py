@@ -83,6 +83,19 @@ def test_bad_units_are_refused_by_name(tmp_path, units, extra, message):
         load_real_rolls(_box_file(tmp_path, units, 1.0, **extra))
 
 
+@pytest.mark.parametrize("scale", [1e-4, 1000.0])
+def test_a_hull_no_die_spans_is_refused_by_its_span(tmp_path, scale):
+    with pytest.raises(DesignError, match="hull_vertices span"):
+        load_real_rolls(_box_file(tmp_path, "mm", scale))
+
+
+def test_a_binomial_target_of_any_size_is_read():
+    from diefab.physics.realrolls import _designed_target
+
+    np.testing.assert_allclose(_designed_target("binom3", (0, 1, 2, 3)), [1 / 8, 3 / 8, 3 / 8, 1 / 8])
+    assert _designed_target("binom2000", (1000,))[0] == pytest.approx(0.01784, rel=1e-3)  # about 1/sqrt(pi N / 2)
+
+
 # ---------------------------------------------------------------------------
 # listed faces planar within a tolerance in mm
 

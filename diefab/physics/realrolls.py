@@ -49,6 +49,8 @@ MERGE_TOLERANCE_MM = 0.05
 
 #: Millimetres per unit of ``geometry.units`` (``model`` units take ``geometry.size_mm`` instead).
 UNITS_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4}
+#: Smallest and largest span of a real die's hull, mm (a grain of sand to a beach ball).
+HULL_SPAN_MM = (0.1, 10_000.0)
 
 
 @dataclass(frozen=True, eq=False)
@@ -182,8 +184,9 @@ def _designed_target(name: str, outcomes: tuple[int, ...]) -> np.ndarray:
     import re
 
     if m := re.match(r"binom(\d+)", name):
-        n = int(m[1])
-        return np.array([math.comb(n, int(o)) for o in outcomes], dtype=float) / 2**n
+        from scipy.stats import binom
+
+        return binom.pmf(np.asarray(outcomes, dtype=float), int(m[1]), 0.5)  # any N, without overflow
     return np.full(len(outcomes), 1.0 / len(outcomes))
 
 
@@ -335,6 +338,10 @@ def load_real_rolls(path: str | Path) -> RealRolls:
     vertices = np.array(geo["hull_vertices"], dtype=float)
     units = geo.get("units", "mm")
     mm = UNITS_MM[units] if units != "model" else float(geo["size_mm"]) / float(np.ptp(vertices, axis=0).max())
+    span = float(np.ptp(vertices, axis=0).max()) * mm
+    if not (HULL_SPAN_MM[0] <= span <= HULL_SPAN_MM[1]):
+        raise DesignError(f"real rolls {path}: geometry.hull_vertices span {span:.3g} mm; a die spans "
+                          f"{HULL_SPAN_MM[0]:g} mm to {HULL_SPAN_MM[1]:g} mm (are geometry.units right?)")  # fmt: skip
     reference = {}
     for key in ("ours", "bullet", "ipc"):
         if key in data.get("their_model_and_sims", {}):
