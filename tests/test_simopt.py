@@ -241,9 +241,10 @@ def test_cli_run_and_resume(tmp_path, capsys, bad):
     report = json.loads(capsys.readouterr().out)
     assert report["evaluations"] == 5 and report["replayed"] == 3
     assert len(_records(run)) == 5
-    # a different seed cannot continue it
+    # a different seed or fill cannot continue it
     err = bad(*args, "--seed", "9", "--resume", run)
     assert "--seed" in err
+    assert "differs from the run's (solid" in bad(*args, "--fill", "print", "--resume", run)
 
 
 def test_fast_model_through_optimize(tmp_path, capsys):

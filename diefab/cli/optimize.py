@@ -265,6 +265,9 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
             if source is not None and source.name == "COMMANDLINE" and value != kept:
                 flag = next(p.opts[0] for p in ctx.command.params if p.name == key)
                 raise RunError(f"{flag} {value} differs from the run's {kept} (stored in {log.spec_path})")
+        if any(v is not None for v in (fill or {}).values()) and d.fill != stored.fill:
+            raise RunError(f"the fill given ({d.fill.describe()}) differs from the run's ({stored.fill.describe()}, "
+                           f"stored in {log.spec_path})")  # fmt: skip
         if physics_profile is not None and physics_settings(d, physics_profile).as_dict() != spec.physics:
             raise RunError(f"--physics {physics_profile} differs from the run's physics (stored in {log.spec_path})")
         if ctx.get_parameter_source("robust").name == "COMMANDLINE" and robust != bool(spec.robust):
