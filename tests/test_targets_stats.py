@@ -202,3 +202,16 @@ def test_bad_roll_logs(tmp_path, content, message):
         read_rolls(path)
     with pytest.raises(StatsError, match="not a value"):
         counts_from_rolls([7], range(-4, 5))
+
+
+def test_the_expected_tvd_is_a_mean_tvd_at_any_number_of_rolls():
+    from diefab.stats.goodness import expected_tvd, goodness_of_fit
+
+    target = np.array([1, 4, 10, 16, 19, 16, 10, 4, 1]) / 81
+    one = goodness_of_fit(np.eye(9, dtype=int)[4], target)
+    # one roll: the TVD is 1 - p of the value rolled, so its mean is 1 - sum p^2; the asymptotic figure is 1.13
+    assert one.expected_tvd == pytest.approx(1 - (target**2).sum(), abs=0.01)
+    assert expected_tvd(9, 1) > 1
+    assert 0 < one.expected_jsd < np.log(2)
+    many = goodness_of_fit(np.rint(target * 81_000).astype(int), target)
+    assert many.expected_tvd == expected_tvd(9, many.n)  # every expected count at least 5: the paper's figure
