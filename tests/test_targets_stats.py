@@ -215,3 +215,14 @@ def test_the_expected_tvd_is_a_mean_tvd_at_any_number_of_rolls():
     assert 0 < one.expected_jsd < np.log(2)
     many = goodness_of_fit(np.rint(target * 81_000).astype(int), target)
     assert many.expected_tvd == expected_tvd(9, many.n)  # every expected count at least 5: the paper's figure
+
+
+def test_stats_weighs_the_design_s_values_with_a_bare_weight_list(run):
+    import json
+
+    code, out, err = run("stats", "--counts", "10,10,10,10,10,20", "--design", "d6", "--target", "1,1,1,1,1,2",
+                         "--json")  # fmt: skip
+    assert code == 0, err
+    report = json.loads(out)
+    assert report["values"] == ["1", "2", "3", "4", "5", "6"]  # the d6's values, not 0..5
+    assert report["tvd"] == pytest.approx(0.0)

@@ -6,6 +6,7 @@ import contextlib
 import re
 import shlex
 import time
+import unicodedata
 from pathlib import Path
 
 import click
@@ -41,6 +42,7 @@ EXIT_ABOVE_TOLERANCE = 3
 
 
 def _slug(text: str) -> str:
+    text = unicodedata.normalize("NFKC", text)  # as the target is read: a fullwidth 2d6 is 2d6
     return re.sub(r"[^a-z0-9]+", "-", text.lower()).strip("-") or "target"
 
 

@@ -72,14 +72,15 @@ def stats(counts: str | None, rolls: Path | None, target: str | None, design_spe
     if target is None:
         raise click.UsageError("give --target, or --design for the die's own target")
     column = None
+    support = None if die is None else list(die.support)  # a bare weight list weighs the die's values
     if counts is not None:
         x = parse_counts(counts)
-        goal = parse_target(target)
+        goal = parse_target(target, support)
         if len(x) != len(goal.values):
             raise StatsError(f"{len(x)} counts for the {len(goal.values)} values of target {target!r}")
         seq = sequential_counts(x, goal.probabilities, delta, alpha)
     else:
-        goal = parse_target(target)
+        goal = parse_target(target, support)
         values, column = read_roll_column(rolls)
         if not as_json:
             note = f"read column {column!r} of {rolls}" if column else f"read {len(values)} rolls of {rolls}"
@@ -141,10 +142,13 @@ def stats(counts: str | None, rolls: Path | None, target: str | None, design_spe
         f"(Monte-Carlo {fit.p_value_mc:.4f}){'  [some expected counts < 5]' if fit.small_expected else ''}"
     )
     con.print(f"G = {fit.g:.3f}, p = {fit.g_p_value:.4f}")
-    con.print(
-        f"TVD = {fit.tvd:.4f} (expected under the target {fit.expected_tvd_exact:.4f}; "
-        f"the paper's sqrt((K-1)/(2 pi N)) gives {fit.expected_tvd:.4f})"
-    )
+    if fit.small_expected:
+        con.print(f"TVD = {fit.tvd:.4f} (expected under the target {fit.expected_tvd:.4f}, over draws of {fit.n})")
+    else:
+        con.print(
+            f"TVD = {fit.tvd:.4f} (expected under the target {fit.expected_tvd_exact:.4f}; "
+            f"the paper's sqrt((K-1)/(2 pi N)) gives {fit.expected_tvd:.4f})"
+        )
     con.print(f"JSD = {fit.jsd:.5f} (expected under the target {fit.expected_jsd:.5f})")
     if power_n is not None:
         con.print(

@@ -27,6 +27,7 @@ Examples
 from __future__ import annotations
 
 import re
+import unicodedata
 from collections.abc import Sequence
 from dataclasses import dataclass
 from math import comb
@@ -135,7 +136,9 @@ def parse_target(spec: str, values: Sequence[int] | None = None) -> Target:
             values = [_integer(v) for v in values]
         except (TypeError, ValueError):
             raise TargetError(f"the design's values {values!r} are not a sequence of integers") from None
-    text = spec.strip().lower().replace("\u2212", "-")
+    text = unicodedata.normalize("NFKC", spec).strip().lower().replace("\u2212", "-")  # fullwidth 2d6: 2d6
+    if not text.isascii():
+        raise TargetError(f"target {spec!r}: write it with ASCII letters and digits (4df, 2d6, 1,4,10)")
     target = _parse(text, spec, values)
     if values is not None:
         target.aligned(values)  # raises if the supports differ

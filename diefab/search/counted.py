@@ -74,7 +74,10 @@ def nearest_faces_clause(target: Target, faces: int | None) -> str:
         return ""
     near = min(found, key=lambda c: (abs(c.faces - faces), c.tvd))
     best = found[0]
-    text = f"; the nearest face count, {near.faces}, reaches TVD {float(near.tvd):.4f} ({near.kind} die)"
+    if near.faces == faces:  # the count exists, in a family other than the one asked for
+        text = f"; a counted die with {faces} faces reaches TVD {float(near.tvd):.4f} ({near.kind} die)"
+    else:
+        text = f"; the nearest face count, {near.faces}, reaches TVD {float(near.tvd):.4f} ({near.kind} die)"
     if best is not near:
         text += f", and {best.faces} faces reach {float(best.tvd):.4f} ({best.kind})"
     return text
