@@ -267,6 +267,13 @@ BAD_ARGS = [
     (["validate", "fudge-gem", "--fill", "print", "--glue", "5"], "--glue applies only to --fill paper"),
     (["optimize", "fudge-gem", "--infill", "0.3"], "--infill applies only to --fill print"),
     (["design", "4df", "--fill", "paper", "--nozzle", "0.4"], "--nozzle applies only to --fill print"),
+    (["design", "\u0663d6"], "ASCII"),
+    (["stl", "d6", "--size", "1e9"], "outside [1, 1000] mm"),  # it used to run out of memory
+    (["stl", "d6", "--margin", "1e308"], "--margin"),
+    (["stl", "d6", "--density", "1e308"], "--density"),
+    (["markers", "d6", "--size", "0.5"], "outside [1, 1000] mm"),
+    (["net", "d6", "--page", "100000x100000", "--format", "png"], "larger than 5080 mm"),
+    (["net", "d20", "--size", "8"], "does not fit on face"),  # it used to print a net without numbers
 ]  # fmt: skip
 
 
@@ -1267,3 +1274,13 @@ def test_a_needle_mesh_is_one_line_in_net(tmp_path, bad):
     trimesh.creation.box((2, 0.002, 0.002)).export(tmp_path / "m.stl")
     (tmp_path / "m.toml").write_text(_MESH_TOML)
     assert "wide enough for it to rest on" in bad("net", tmp_path / "m.toml", "--out", tmp_path / "o")
+
+
+@pytest.mark.parametrize("label", ["a\nb", "a\tb"])
+def test_a_label_is_one_line(tmp_path, bad, label):
+    from diefab.dice.design import template_path
+
+    text = template_path("d6").read_text() + f"\n[labels]\nf3 = {json.dumps(label)}\n"
+    (tmp_path / "d.toml").write_text(text)
+    assert "a label is one line" in bad("net", tmp_path / "d.toml", "--out", tmp_path / "out")
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").rglob("*"))

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from diefab.cli.common import design_argument, design_inputs, get_design, out_option
+from diefab.cli.common import check_size, design_argument, design_inputs, get_design, out_option
 
 
 @click.command("markers")
@@ -19,6 +19,8 @@ def markers(design, params, size_mm, page, out_dir) -> None:
     from diefab.fabricate.stickers import sticker_sheets
     from diefab.fabricate.svg import render_svg
 
+    if size_mm is not None:
+        check_size(size_mm)
     d = get_design(design, params)
     sheets = sticker_sheets(d, size_mm=size_mm, page=page)
     ensure_dir(out_dir)

@@ -5,9 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
+import numpy as np
 
 from diefab.cli.common import (
     apply_fill,
+    check_size,
     design_argument,
     design_inputs,
     emit_json,
@@ -21,6 +23,9 @@ from diefab.cli.common import (
 from diefab.cli.net import SIZE_HELP
 from diefab.core.errors import DiefabError
 from diefab.core.files import check_outputs, ensure_dir, output_path, write_files
+
+#: Largest --margin, mm, and largest --density, g/cm³.
+MAX_MARGIN_MM, MAX_DENSITY = 20.0, 25.0
 
 
 @click.command("stl")
@@ -92,6 +97,13 @@ def stl(design, params, size_mm, depth_mm, font_file, round_mm, emboss, bed_face
     bad = [f for f in kinds if f not in ("stl", "3mf")]
     if bad or not kinds:
         raise click.BadParameter(f"{formats!r}: formats are stl and 3mf", param_hint="--format")
+    if size_mm is not None and size_mm > 0:  # zero and negative sizes: the library's message
+        check_size(size_mm)
+    if not (np.isfinite(margin_mm) and 0 <= margin_mm <= MAX_MARGIN_MM):
+        raise click.BadParameter(f"{margin_mm:g} mm is outside [0, {MAX_MARGIN_MM:g}] mm", param_hint="--margin")
+    if not (np.isfinite(density) and 0 < density <= MAX_DENSITY):
+        raise click.BadParameter(f"{density:g} g/cm³ is outside (0, {MAX_DENSITY:g}] (osmium: 22.6)",
+                                 param_hint="--density")  # fmt: skip
     d = get_design(design, params, made="print")
     template, note = template_note(design, d, "print")
     try:

@@ -97,6 +97,13 @@ def text(where: str, value: Any) -> None:
         raise DesignError(f"{where} = {_text(value)} contains a control character")
 
 
+def line(where: str, value: Any) -> None:
+    """A one-line string, perhaps empty (a label: printed on one line)."""
+    if isinstance(value, str) and ("\n" in value or "\t" in value or "\r" in value):
+        raise DesignError(f"{where} = {_text(value)} contains a line break or tab: a label is one line")
+    text(where, value)
+
+
 def word(where: str, value: Any) -> None:
     """A non-empty one-line string (names, families, targets, paths)."""
     if isinstance(value, str) and ("\n" in value or "\t" in value or "\x00" in value):
@@ -171,7 +178,7 @@ FIELDS: dict[str, Check] = {
     "size_mm": positive,
     "params": table(number),
     "values": table(integer),
-    "labels": table(text),
+    "labels": table(line),
     # ranges (and unknown keys): diefab.made.fill.Fill
     "fill": record(
         kind=word,

@@ -45,6 +45,10 @@ class Page:
         return self.width - 2 * self.margin, self.height - 2 * self.margin - self.footer
 
 
+#: Longest page side, mm: a PDF page is at most 14,400 points (200 inches) a side.
+MAX_PAGE_MM = 5080.0
+
+
 def parse_page(spec: str) -> Page:
     """``A5``, ``A4``, ``A3``, ``Letter``, ``Legal`` or ``WxH`` in millimetres (e.g. ``200x250``).
 
@@ -62,6 +66,8 @@ def parse_page(spec: str) -> Page:
     if not m:
         raise FabricationError(f"page {spec!r} is not A5, A4, A3, Letter, Legal or WxH in millimetres (e.g. 200x250)")
     w, h = float(m.group(1)), float(m.group(2))
+    if max(w, h) > MAX_PAGE_MM:
+        raise FabricationError(f"page {spec!r} is larger than {MAX_PAGE_MM:g} mm a side, the largest a PDF holds")
     page = Page(f"{w:g}x{h:g}mm", w, h)
     pw, ph = page.printable
     if pw < 20 or ph < 20:

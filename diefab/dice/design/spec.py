@@ -188,6 +188,8 @@ class Design:
                 raise DesignError(f"labels: face {k!r} does not exist (faces: {', '.join(names)})")
             if not isinstance(v, str):
                 raise DesignError(f"labels: label of face {k!r} must be a string")
+            if any(c in v for c in "\n\r\t"):
+                raise DesignError(f"labels: label of face {k!r} ({v!r}) holds a line break or tab: a label is one line")
         self.target_distribution  # noqa: B018 -- validate the target against the values now
 
     def _check_body(self) -> None:
