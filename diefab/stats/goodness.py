@@ -24,6 +24,7 @@ import numpy as np
 
 from diefab.core.errors import StatsError
 from diefab.core.tolerances import PROBABILITY_SUM
+from diefab.stats.rolllog import MAX_LOG_BYTES as ROLL_LOG_BYTES
 from diefab.stats.rolllog import is_roll_log, parse_value, read_log
 
 __all__ = [
@@ -51,7 +52,8 @@ __all__ = [
 
 #: Most rolls in one set of counts (multinomial sampling works in 64-bit integers).
 MAX_COUNT = 10**15
-#: Largest roll log read, bytes (about two million rolls, far beyond any log rolled by hand).
+#: Largest list or sheet of rolls read, bytes (about two million rolls, far beyond any rolled by hand); a roll
+#: log of diefab's own format is read up to its own limit, :data:`diefab.stats.rolllog.MAX_LOG_BYTES`.
 MAX_LOG_BYTES = 4 << 20
 #: Most rolls whose power :func:`rolls_for_power` simulates; beyond, the noncentral answer stands.
 MONTE_CARLO_MAX = 10**12
@@ -481,8 +483,12 @@ def read_roll_column(path: str | Path) -> tuple[np.ndarray, str | None]:
     path = Path(path)
     if path.exists() and not path.is_file():
         raise StatsError(f"roll log {path} is not a regular file")
-    if path.is_file() and path.stat().st_size > MAX_LOG_BYTES:
-        raise StatsError(f"roll log {path} is larger than {MAX_LOG_BYTES >> 20} MiB")
+    if path.is_file():
+        with open(path, "rb") as f:
+            head = f.readline(256).decode("utf-8-sig", errors="replace")
+        limit = ROLL_LOG_BYTES if is_roll_log(head) else MAX_LOG_BYTES  # a log diefab writes: read as far as written
+        if path.stat().st_size > limit:
+            raise StatsError(f"roll log {path} is larger than {limit >> 20} MiB")
     try:
         text = path.read_text(encoding="utf-8-sig")
     except (OSError, UnicodeDecodeError) as exc:
