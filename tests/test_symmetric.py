@@ -157,3 +157,21 @@ def test_design_command_reports_how_the_die_carries_the_target(tmp_path, capsys)
     assert report["method"] == "fair" and len(report["values"]) == 16 and report["tvd"] < 1e-6
     d = load_design(report["design_file"])
     assert sorted(d.values.values()).count(2) == 6
+
+
+def test_a_counted_die_below_the_margin_asked_says_so(tmp_path, capsys):
+    import json
+
+    from diefab.cli import main
+    from diefab.dice.design import load_design
+
+    with pytest.raises(SystemExit) as exit_:
+        main(["design", "binomial:4", "--model", "fast", "--validate-sims", "0", "--min-margin", "5",
+              "--out", str(tmp_path), "--json"])  # fmt: skip
+    assert exit_.value.code == 0
+    captured = capsys.readouterr()
+    report = json.loads(captured.out)
+    d = load_design(report["design_file"])
+    assert report["smallest_margin"] == pytest.approx(min(d.margins()[d.resting_mask()]))
+    assert report["smallest_margin"] < report["min_margin"] == 5
+    assert "not above --min-margin 5" in captured.err

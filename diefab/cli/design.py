@@ -186,6 +186,11 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
         f"by diefab design: {_METHOD[found.method]} "
         f"({found.model} model, seed {seed})",
     )
+    smallest = float(np.min(np.where(d.resting_mask(), d.margins(), np.inf)))
+    if smallest <= min_margin:  # a fair or counted die's shape is fixed by its counts, not by the margin asked
+        click.echo(f"diefab: note: the die's smallest stability margin is {smallest:.4f}, not above --min-margin "
+                   f"{min_margin:g}: a die whose faces are counted out takes the shape its counts give",
+                   err=True)  # fmt: skip
     given = {"size_mm": "--size", "min_margin": "--min-margin", "tolerance": "--tolerance"}
     how = "".join(f" --{k.replace('_', '-')} {v}" for k, v in fill_settings.items() if v is not None)
     how += "".join(f" {flag} {ctx.params[k]}" for k, flag in given.items()
@@ -251,6 +256,8 @@ def design(ctx, target, faces, family_name, model, max_drops, budget, tolerance,
             "kind": found.nearest.kind, "faces": found.nearest.faces, "tvd": float(found.nearest.tvd)},
         "validated": validated,
         "tolerance": tolerance,
+        "smallest_margin": smallest,
+        "min_margin": min_margin,
         "within_tolerance": None if verdict is None else verdict.met,
         "verdict": None if verdict is None else verdict.why,
         "plain_verdict": said,

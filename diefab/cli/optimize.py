@@ -350,6 +350,9 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
         on_failure=(lambda: log.discard(best_path)) if fresh else None,
     )  # fmt: skip
     if result.best is None:
+        if result.evaluations == 0:
+            again = f"diefab optimize {design} --model simulation --resume {log.folder} --budget MINUTES"
+            raise RunError(f"the budget ran out before the first evaluation: resume with a larger one ({again})")
         raise RunError(f"no stable candidate was simulated in {result.evaluations} evaluations: "
                        "lower --min-margin or change the target")  # fmt: skip
     best = result.best
