@@ -129,7 +129,7 @@ def test_optimize_writes_a_loadable_template(run, tmp_path):
         (("stats", "--counts", "1,-2,3,1,1,1,1,1,1", "--target", "4df"), "negative"),
         (("stats", "--target", "4df"), "exactly one"),
         (("stats", "--counts", "1,2"), "give --target, or --design"),
-        (("stats", "--counts", "1,1,1", "--target", "uniform:3", "--design", "fudge-gem"), "not the values"),
+        (("stats", "--counts", "1,1,1", "--target", "uniform:3", "--design", "fudge-gem"), "the design's values are"),
         (("stats", "--counts", "1,1,1", "--design", "no-such-die"), "unknown template"),
         (("stats", "--counts", "1,2", "--target", "nonsense"), "unknown target"),
         (("optimize", "fudge-gem", "--min-margin", "-1"), "non-negative"),
