@@ -32,7 +32,8 @@ from diefab.dice.design import format_value
     help="The die rolled (a template name or design file): also score each landing model's prediction "
     "of it against the rolls.",
 )
-@click.option("--alpha", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.05, show_default=True)
+@click.option("--alpha", type=click.FloatRange(1e-9, 0.5), default=0.05, show_default=True,
+              help="Significance level of the tests and intervals, 1e-9 to 0.5.")  # fmt: skip
 @click.option("--delta", type=click.FloatRange(0, 1, min_open=True, max_open=True), default=0.03, show_default=True,
               help="Tolerance in TVD of the verdict: within it of the target, or off by at least it.")  # fmt: skip
 @click.option("--sequential", is_flag=True,
@@ -82,11 +83,11 @@ def stats(counts: str | None, rolls: Path | None, target: str | None, design_spe
     else:
         goal = parse_target(target, support)
         values, column = read_roll_column(rolls)
+        x = counts_from_rolls(values, goal.values)  # a roll off the target is one line, before any note
+        seq = sequential_test(np.searchsorted(goal.values, values), goal.probabilities, delta, alpha)
         if not as_json:
             note = f"read column {column!r} of {rolls}" if column else f"read {len(values)} rolls of {rolls}"
             click.echo(note, err=True)
-        x = counts_from_rolls(values, goal.values)
-        seq = sequential_test(np.searchsorted(goal.values, values), goal.probabilities, delta, alpha)
     if sequential:
         return _sequential(seq, target, column, as_json)
     fit = goodness_of_fit(x, goal.probabilities, alpha=alpha, seed=seed)
@@ -130,7 +131,7 @@ def stats(counts: str | None, rolls: Path | None, target: str | None, design_spe
     from rich.table import Table
 
     con = console()
-    table = Table("value", "count", "expected", "observed", f"{1 - alpha:.0%} simultaneous CI", "target")
+    table = Table("value", "count", "expected", "observed", f"{100 * (1 - alpha):.10g} % simultaneous CI", "target")
     signed = min(goal.values) < 0
     for v, c, e, o, (lo, hi), p in zip(goal.values, x, fit.expected, observed, fit.intervals, goal.probabilities):
         table.add_row(

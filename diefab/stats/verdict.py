@@ -167,7 +167,7 @@ def verdict(
     """
     s = sequential
     n = int(np.sum(counts))
-    level = f"{100 * (1 - s.alpha):g} %"
+    level = f"{100 * (1 - s.alpha):.10g} %"
     ci = f"TVD {s.tvd:.3f}, {level} CI {s.tvd_low:.3f}\u2013{s.tvd_high:.3f}"
     distinguishable = bool(p_value < alpha)
     noticed = notice_rolls(counts, target, alpha=alpha) if distinguishable else None
@@ -208,7 +208,7 @@ def sequential_line(seq: SequentialResult, label: str) -> str:
     >>> print(sequential_line(sequential_counts([10, 90], [0.5, 0.5], 0.2), "a fair coin"))
     100 rolls: TVD 0.400 to a fair coin, 95 % anytime CI 0.251–0.476: off a fair coin by at least TVD 0.2
     """
-    level = f"{100 * (1 - seq.alpha):g} %"
+    level = f"{100 * (1 - seq.alpha):.10g} %"
     if seq.n == 0:
         return f"no rolls yet: {_still_needed(seq, label, 'likely needed')}"
     head = (
