@@ -32,7 +32,7 @@ SIZE_HELP = (
     "--format", "formats", default="svg,pdf", show_default=True, metavar="svg,pdf,png", help="Output formats."
 )
 @click.option("--face-names", is_flag=True, help="Also print the small face names (f1, f2, ...).")
-@click.option("--tab-width", type=float, default=5.0, show_default=True,
+@click.option("--tab-width", type=click.FloatRange(0, 50), default=5.0, show_default=True,
               help="Glue-tab width before narrowing, mm; 0 for no tabs (edges lettered on both sides).")  # fmt: skip
 @click.option("--copies", type=click.IntRange(1, 1000), default=1, show_default=True, help="Dice on the sheet(s).")
 @click.option("--mark", type=click.Choice(["bar", "period", "none"]), default="bar", show_default=True,
