@@ -70,7 +70,7 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
     import os
 
     from diefab.core.errors import PhysicsError
-    from diefab.core.files import atomic_write, check_outputs, ensure_dir
+    from diefab.core.files import check_outputs, ensure_dir, write_files
     from diefab.models.choice import best_model
     from diefab.models.probabilities import value_probabilities
     from diefab.physics.simulate import SimulationInterrupted, plot_validation, simulate
@@ -174,11 +174,13 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
         out["checkpoint"] = {"file": str(checkpoint), "resumed": result.resumed}
     if real is not None:
         out["real_rolls"] = real_rolls_score(d, real, counts, rolls_file)
+    files = {}  # the plot and the report: both written or neither
     if plot_file is not None:
-        atomic_write(plot_file, plot_validation(d, result, fmt=plot_file.suffix.lower()[1:], model=choice.name),
-                     inputs=inputs)  # fmt: skip
+        files[plot_file] = plot_validation(d, result, fmt=plot_file.suffix.lower()[1:], model=choice.name)
     if report_file is not None:
-        _write_report(report_file, d, fit, result, said.text, settings, inputs)
+        files[report_file] = _report_page(d, fit, result, said.text, settings)
+    if files:
+        write_files(files, inputs=inputs)
     if as_json:
         emit_json(out)
         return
@@ -246,8 +248,8 @@ def real_rolls_score(d, real, simulated, path) -> dict:
             "df": report["df"], "p_value": report["p_value"]}  # fmt: skip
 
 
-def _write_report(path, d, fit, result, verdict, settings, inputs) -> None:
-    from diefab.core.files import atomic_write
+def _report_page(d, fit, result, verdict, settings) -> bytes:
+    """The HTML page of ``--report``."""
     from diefab.fabricate.report import DieReport, die_pictures, render_report
 
     report = DieReport(
@@ -259,7 +261,7 @@ def _write_report(path, d, fit, result, verdict, settings, inputs) -> None:
                "physics: " + ", ".join(f"{k}={v}" for k, v in settings.as_dict().items())],
         pictures=die_pictures(d),
     )  # fmt: skip
-    atomic_write(path, render_report(report).encode("utf-8"), inputs=inputs)
+    return render_report(report).encode("utf-8")
 
 
 def _sensitivity(d, base, sims, seed, workers, scheduler, as_json, overrides) -> None:
