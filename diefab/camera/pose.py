@@ -62,9 +62,8 @@ CORNER_PX, LENS_DEG = 0.2, 1.0
 FLAT_DEG = (12.0, 24.0)
 #: Reprojection error, as a fraction of the markers' image size, fully trusted and not at all.
 REPROJECTION = (0.08, 0.16)
-
-
-#: Markers a pose on several markers must leave unexplained before the frame is taken to show another die.
+#: Markers a pose on several markers must leave unexplained before the frame is taken to show another die
+#: (beside a one-marker pose, one is enough): one alone is taken for a pattern decoded by chance.
 UNEXPLAINED = 2
 
 
@@ -100,9 +99,10 @@ class Pose:
     """The die's pose in camera coordinates.
 
     rotation : (3, 3) float, model coordinates -> camera; translation : (3,) float, mm (the model origin).
-    markers : ids of the markers that agree with the pose; conflicts : ids of markers of the die's dictionary
-    seen that the pose does not explain, on no face of the die or far from where the pose puts them (another
-    die numbered from the same dictionary, or a second die); error : RMS reprojection error, pixels;
+    markers : ids of the markers that agree with the pose; conflicts : ids of the markers of the die's
+    dictionary seen that the pose does not explain (on no face of the die, or far from where the pose puts
+    them), when there are enough of them (:data:`UNEXPLAINED`) to say that the frame shows another die numbered
+    from the same dictionary, or two dice, else empty; error : RMS reprojection error, pixels;
     scale : mean image side of those markers, pixels; alternative : the other planar solution (rotation) of a
     one-marker pose when it fits almost as well; spread_deg : the rotation's standard error along its worst
     axis, degrees (from the solve's Jacobian and the corners' scatter); covariance : (3, 3) float, the
