@@ -38,6 +38,15 @@ from diefab.core.files import atomic_write, check_outputs, ensure_dir, output_pa
 from diefab.dice.design import format_value
 
 
+def _check_free(d) -> None:
+    """Refuse, before any folder is made, a design whose family has nothing to optimize (convex, mesh)."""
+    from diefab.core.errors import DesignError
+    from diefab.dice.families import family
+
+    if not family(d.family).free_names(d.params):
+        raise DesignError(f"family {d.family!r} has no parameters to optimize")
+
+
 @click.command()
 @design_argument
 @click.option(
@@ -101,6 +110,7 @@ def optimize(ctx, design, params, model, target, seed, min_margin, starts, free,
     if not np.isfinite(min_margin) or min_margin < 0:
         raise click.BadParameter(f"{min_margin} must be a non-negative number", param_hint="--min-margin")
     names = free_parameters(d, free)
+    _check_free(d)
     ensure_dir(out_dir)
     name = name or f"{d.name}-{model}-opt"
     inputs = design_inputs(design, d) + profile_inputs(physics_profile)
@@ -235,6 +245,7 @@ def optimize_simulation(ctx, design, params, target, seed, min_margin, starts, f
     if not np.isfinite(min_margin) or min_margin < 0:
         raise click.BadParameter(f"{min_margin} must be a non-negative number", param_hint="--min-margin")
     d = apply_fill(get_design(design, params, target), **(fill or {}))
+    _check_free(d)
     d.check_stable(0.0)
     if method is None and resume is None:
         method = "correction" if robust else "cma"
