@@ -1,8 +1,11 @@
 """Reading marked dice from rendered frames: accuracy on rests, rolls counted in videos, frames per second.
 
     python benchmarks/bench_read.py [--rests 2000] [--drops 200] [--dice gem,d6,bipyramid24,d20] [--seed 1]
+    python benchmarks/bench_read.py --rests 0 --drops 0 --others 50
 
 (`--rests 0` or `--drops 0` leaves that part out, so the parts may run side by side.)
+`--others N`: N rendered rests of each die read as each other die of `--dice` (its markers numbered
+from the same dictionary): how many are read, which is always wrong, and how many are unread.
 
 For each die: `--rests` rendered rests (a resting face drawn uniformly, any
 yaw, random camera tilt up to 6 degrees, lens 55-75 degrees while the reader
@@ -129,6 +132,28 @@ def bench_video(design, drops: int, seed: int) -> dict:
     }  # fmt: skip
 
 
+def bench_others(table: dict, n: int, seed: int) -> None:
+    """Print, for each pair of dice, how many of `n` rests of the first are read as rolls of the second."""
+    from diefab.camera.pose import Camera, MarkerDetector, read_frame
+    from diefab.camera.rig import rendered_rests
+    from diefab.dice.markers import marker_layout
+
+    camera = Camera.from_fov(1280, 720)
+    readers = {name: (d, MarkerDetector(marker_layout(d))) for name, d in table.items()}
+    total = wrong = 0
+    for shown, design in table.items():
+        images = [r.image for r in rendered_rests(design, marker_layout(design), n, seed, finger=0.0)]
+        cells = []
+        for name, (d, detector) in readers.items():
+            if name == shown:
+                continue
+            read = sum(read_frame(image, d, detector, camera).value is not None for image in images)
+            cells.append(f"as {name} {read}")
+            total, wrong = total + n, wrong + read
+        print(f"{shown:12s} {n} rests read as another die: " + ", ".join(cells), flush=True)
+    print(f"read as another die (always wrong): {wrong} of {total}", flush=True)
+
+
 def main() -> None:
     import cv2
 
@@ -137,6 +162,7 @@ def main() -> None:
     parser.add_argument("--drops", type=int, default=200)
     parser.add_argument("--dice", default="gem,d6,bipyramid24,d20")
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--others", type=int, default=0)
     args = parser.parse_args()
     cv2.setNumThreads(1)
     print(f"OpenCV {cv2.__version__}, one thread, CPU time; frames 1280x720; seed {args.seed}")
@@ -147,6 +173,8 @@ def main() -> None:
             _print_rests(name, bench_rests(design, args.rests, args.seed))
         if args.drops:
             _print_video(name, bench_video(design, args.drops, args.seed))
+    if args.others:
+        bench_others({name: table[name] for name in args.dice.split(",")}, args.others, args.seed)
 
 
 def _print_rests(name: str, r: dict) -> None:

@@ -55,6 +55,11 @@ BENCHMARKS = [
     ("bench_many_faces.py", [], ["--sims", "40"]),
     ("bench_fair_shapes.py", [], ["--faces", "22", "--sims", "600"]),
     ("robust_gem.py", [], ["--evals", "2", "--sims", "500"]),
+    (
+        "bench_read.py",
+        ["--rests", "0", "--drops", "0", "--others", "50"],
+        ["--rests", "0", "--drops", "0", "--others", "5"],
+    ),
 ]
 
 
