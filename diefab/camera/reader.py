@@ -174,7 +174,7 @@ class RollReader:
         """
         if read.detected:  # markers of the die's dictionary that are not on the die, or not where the pose puts them
             self._foreign += FOREIGN_FRAMES // 2 if photo else 1
-            where = "markers that are not on this die"
+            where = "markers that are not on this die (another die, or two dice in view)"
         else:
             other = self.detector.foreign(gray) if photo or self.frame % 15 == 0 else None
             if other is None:
