@@ -52,7 +52,8 @@ class LogReading:
     rows : list of Roll
         The log's rolls: those it held, then those read (held-back rolls included).
     skipped : int
-        Photos of the folder read that the log already held.
+        Photos of the folder read that were not read again: the log held them, or they are copies of
+        another photo of the folder.
     """
 
     def __init__(self, reader: RollReader, log: str | Path) -> None:
@@ -94,6 +95,14 @@ class LogReading:
                     self._flush()
             yield Reading(t, gray, seen, row)
         self._flush()
+
+    def skipped_line(self, folder) -> str:
+        """One line on the photos of `folder` not read again ("" when none)."""
+        n = self.skipped
+        if not n:
+            return ""
+        photos = f"{n} photo{'s' * (n != 1)} of {folder} {'were' if n != 1 else 'was'}"
+        return f"{photos} read before (in the log, or a copy of another): not read again"
 
     def _photos(self, folder) -> Iterator[tuple[float, np.ndarray, str]]:
         todo = []

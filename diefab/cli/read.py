@@ -64,7 +64,7 @@ def read(
     source = itertools.chain([] if first is None else [first], source)
     new = _run(d, session, source, tally, show, out_dir, name)
     if session.skipped:
-        click.echo(f"{session.skipped} photos of {images} were already in {log}: not read again", err=True)
+        click.echo(session.skipped_line(images), err=True)
     if not session.rows:
         click.echo(f"no roll read; log {log} not written", err=True)
         return

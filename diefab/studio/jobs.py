@@ -316,5 +316,5 @@ def read_job(design, source: dict, settle: int, min_confidence: float, fov: floa
         report("roll", step.time, roll.value, roll.face, float(roll.confidence))
         count += 1
     if session.skipped:
-        report("note", f"{session.skipped} photos were already in the log: not read again")
+        report("note", session.skipped_line(source["images"]))
     return count
