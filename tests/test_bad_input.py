@@ -274,6 +274,9 @@ BAD_ARGS = [
     (["markers", "d6", "--size", "0.5"], "outside [1, 1000] mm"),
     (["net", "d6", "--page", "100000x100000", "--format", "png"], "larger than 5080 mm"),
     (["net", "d20", "--size", "8"], "does not fit on face"),  # it used to print a net without numbers
+    (["net", "d6", "--tab-width", "100"], "--tab-width"),
+    (["stats", "--counts", "10,12,9,11,8,10", "--target", "uniform:6", "--alpha", "1e-300"], "--alpha"),
+    (["optimize", "d6"], "has no parameters to optimize"),  # and no output folder is made
 ]  # fmt: skip
 
 

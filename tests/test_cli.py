@@ -203,3 +203,9 @@ def test_fast_model_on_a_fill_without_its_correction_says_it_extrapolates(run, m
     assert "learned on solid gems" in err and len(err.strip().splitlines()) == 1
     code, _, err = run("predict", "fudge-gem", "--model", "fast")
     assert code == 0 and "learned on solid gems" not in err
+
+
+def test_a_bare_diefab_prints_its_help(run):
+    code, out, err = run()
+    assert code == 0 and not err
+    assert out.startswith("Usage: diefab") and "Commands:" in out
