@@ -131,7 +131,7 @@ def template_note(spec: str, design: Design, made: str) -> tuple[str | None, str
 def design_inputs(spec: str, design: Design, made: str | None = None) -> list[Path]:
     """The files DESIGN was read from (design file or template, mesh, SVG symbols): no output may replace them."""
     from diefab.core.errors import DiefabError
-    from diefab.dice.design import template_path
+    from diefab.dice.design import files_read, template_path
 
     files = []
     if Path(spec).is_file():
@@ -141,10 +141,7 @@ def design_inputs(spec: str, design: Design, made: str | None = None) -> list[Pa
             files.append(Path(str(template_path(spec, made))))
         except DiefabError:
             pass
-    if design.mesh is not None:
-        files.append(Path(design.mesh))
-    files += [Path(text[4:].strip()) for text in design.labels.values() if text.startswith("svg:")]  # symbols
-    return files
+    return files + files_read(design.mesh, design.labels)  # its mesh and SVG symbols
 
 
 #: Sizes of a die the commands that make one accept, millimetres (a marble to a beach ball).

@@ -6,7 +6,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from diefab.core.errors import FabricationError, OutputError
-from diefab.dice.design import Design, design_to_toml
+from diefab.dice.design import Design, design_to_toml, files_read
 
 
 def _inside(out_dir: Path, path: Path) -> Path:
@@ -18,10 +18,9 @@ def _inside(out_dir: Path, path: Path) -> Path:
     return Path(path)
 
 
-def design_files(design: Design) -> list[Path]:
-    """The files `design` reads (its mesh, its SVG symbols)."""
-    files = [Path(design.mesh)] if design.mesh is not None else []
-    return files + [Path(t[4:].strip()) for t in design.labels.values() if t.startswith("svg:")]
+def _kept(design: Design, inputs: Iterable[Path]) -> list[Path]:
+    """The files no writer may replace: the design's own (its mesh, its SVG symbols) and `inputs`."""
+    return [*files_read(design.mesh, design.labels), *inputs]
 
 
 def write_net(design: Design, out_dir: Path, *, page: str = "A4", formats: tuple[str, ...] = ("svg", "pdf"),
@@ -40,7 +39,7 @@ def write_net(design: Design, out_dir: Path, *, page: str = "A4", formats: tuple
     rendered, _ = marked_net(design, net, formats, markers=markers, face_names=face_names, copies=copies, mark=mark,
                              pips=pips)  # fmt: skip
     paths = {k: _inside(out_dir, output_path(out_dir, design.name, f"-net.{k}")) for k in formats}
-    return write_files({paths[k]: rendered[k] for k in formats}, inputs=[*design_files(design), *inputs])
+    return write_files({paths[k]: rendered[k] for k in formats}, inputs=_kept(design, inputs))
 
 
 def write_solid(
@@ -76,7 +75,7 @@ def write_solid(
         payloads[path] = stl_bytes(solid) if k == "stl" else threemf_bytes(solid)
     if inlay:
         payloads[_inside(out_dir, output_path(out_dir, design.name, "-inlay.stl"))] = inlay_stl_bytes(solid)
-    return write_files(payloads, inputs=[*design_files(design), *inputs]), dict(solid.report)
+    return write_files(payloads, inputs=_kept(design, inputs)), dict(solid.report)
 
 
 def write_design(design: Design, out_dir: Path, *, inputs: Iterable[Path] = ()) -> Path:
@@ -86,7 +85,7 @@ def write_design(design: Design, out_dir: Path, *, inputs: Iterable[Path] = ()) 
     ensure_dir(out_dir)
     path = _inside(out_dir, output_path(out_dir, design.name, ".toml"))
     text = design_to_toml(design, comment="saved by diefab studio")
-    return write_files({path: text}, inputs=[*design_files(design), *inputs])[0]
+    return write_files({path: text}, inputs=_kept(design, inputs))[0]
 
 
 def net_faces(design: Design, page: str = "A4"):

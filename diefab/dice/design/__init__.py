@@ -11,6 +11,7 @@ Examples
 
 from diefab.dice.design.files import (
     design_to_toml,
+    files_read,
     list_templates,
     load_design,
     parse_design,
@@ -31,6 +32,7 @@ __all__ = [
     "Design",
     "design_axis",
     "design_to_toml",
+    "files_read",
     "format_value",
     "list_templates",
     "load_design",

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import re
 import tomllib
+from collections.abc import Mapping
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -221,14 +222,22 @@ def parse_design(
         raise DesignError(f"{source}: {exc}") from exc
 
 
+def files_read(mesh: str | Path | None, labels: Mapping[str, object] | None) -> list[Path]:
+    """The files a design of this `mesh` and these `labels` reads: the mesh, then each SVG symbol.
+
+    >>> [str(f) for f in files_read("die.stl", {"f1": "svg:star.svg", "f2": "4dF"})]
+    ['die.stl', 'star.svg']
+    """
+    files = [Path(mesh)] if mesh is not None else []
+    if isinstance(labels, Mapping):
+        files += [Path(t[4:].strip()) for t in labels.values() if isinstance(t, str) and t.startswith("svg:")]
+    return files
+
+
 def _check_within(kwargs: dict, source: str, folder: Path) -> None:
     """Refuse design arguments that name a file (a mesh, an SVG symbol) outside `folder`."""
-    labels = kwargs.get("labels")
-    files = [kwargs["mesh"]] if "mesh" in kwargs else []
-    if isinstance(labels, dict):
-        files += [Path(t[4:].strip()) for t in labels.values() if isinstance(t, str) and t.startswith("svg:")]
     root = Path(folder).resolve()
-    for f in files:
+    for f in files_read(kwargs.get("mesh"), kwargs.get("labels")):
         if root not in Path(f).resolve().parents:
             raise DesignError(f"{source}: files are read only in {folder}, not {f}")
 
