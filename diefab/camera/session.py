@@ -59,8 +59,9 @@ class LogReading:
     def __init__(self, reader: RollReader, log: str | Path) -> None:
         self.reader, self.log = reader, Path(log)
         if self.log.exists():
-            repair_log(self.log)
-            held = read_log(self.log)
+            held = read_log(self.log)  # refuses a file that is not a roll log
+            if held.torn:
+                repair_log(self.log)
             self.rows, self._digests = list(held.rolls), set(held.digests)
         else:
             self.rows, self._digests = [], set()
