@@ -18,6 +18,7 @@ import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -279,16 +280,21 @@ class GoodnessOfFit:
         With an expected count below 5 (:attr:`small_expected`) the asymptotic figure overstates it (above 1
         at n = 1), so the mean over :data:`SAMPLED_MEANS` draws of n rolls (seed 0) is given instead.
         """
-        return sampled_means(self.target, self.n)[0] if self.small_expected else expected_tvd(len(self.counts), self.n)
+        return self._sampled[0] if self.small_expected else expected_tvd(len(self.counts), self.n)
 
     @property
     def expected_tvd_exact(self) -> float:
-        return sampled_means(self.target, self.n)[0] if self.small_expected else expected_tvd_exact(self.target, self.n)
+        return self._sampled[0] if self.small_expected else expected_tvd_exact(self.target, self.n)
 
     @property
     def expected_jsd(self) -> float:
         """Mean JSD of n rolls of the target (asymptotic, or sampled when n is small, as :attr:`expected_tvd`)."""
-        return sampled_means(self.target, self.n)[1] if self.small_expected else expected_jsd(len(self.counts), self.n)
+        return self._sampled[1] if self.small_expected else expected_jsd(len(self.counts), self.n)
+
+    @cached_property
+    def _sampled(self) -> tuple[float, float]:
+        """:func:`sampled_means` of the target at n, drawn once for the three figures above."""
+        return sampled_means(self.target, self.n)
 
     @property
     def small_expected(self) -> bool:
