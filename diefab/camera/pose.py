@@ -407,8 +407,8 @@ def read_pose(pose: Pose, design: Design, down: np.ndarray = DOWN) -> tuple[int,
     and the reprojection error relative to the markers' image size
     (:data:`REPROJECTION`).  A one-marker pose whose other planar solution
     fits about as well and rests on another face has confidence 0, and so
-    has a pose that leaves any of the die's markers seen unexplained
-    (``pose.conflicts``: the frame shows another die, or two).
+    has a pose with ``conflicts`` (enough markers seen that it leaves
+    unexplained to say the frame shows another die, or two).
 
     Parameters
     ----------

@@ -9,6 +9,7 @@ import click
 
 from diefab.cli.common import design_argument, get_design, named_folder
 from diefab.cli.live import bars
+from diefab.core.stopping import STOPPED
 
 
 @click.command()
@@ -44,14 +45,10 @@ def roll(design, params, target, out, name, delta) -> None:
     label = target_label(d.target)
     app = roll_app(tally, path, f"{d.name} against {label}", label)
     app.run()
-    if app.return_code == INTERRUPTED:
+    if app.return_code == STOPPED:
         raise KeyboardInterrupt  # Ctrl-C, which the app reads as a key: every roll is already in the log
     click.echo(sequential_line(tally.result(), label))
     click.echo(f"roll log: {path} ({tally.n} rolls)")
-
-
-#: The app's return code after Ctrl-C.
-INTERRUPTED = 130
 
 
 def roll_app(tally, path: Path, title: str, label: str):
@@ -89,7 +86,7 @@ def roll_app(tally, path: Path, title: str, label: str):
             yield Footer()
 
         def action_interrupt(self) -> None:
-            self.exit(return_code=INTERRUPTED)
+            self.exit(return_code=STOPPED)
 
         def on_mount(self) -> None:
             self.refresh_view()
