@@ -204,6 +204,11 @@ def test_bad_roll_logs(tmp_path, content, message):
         counts_from_rolls([7], range(-4, 5))
 
 
+def test_a_roll_off_the_target_is_named_by_its_place_and_file():
+    with pytest.raises(StatsError, match=r"^log.csv: roll 3 of 4 is 7, not a value of the target \(1, 2\)$"):
+        counts_from_rolls([1, 2, 7, 9], [1, 2], "log.csv")
+
+
 def test_the_expected_tvd_is_a_mean_tvd_at_any_number_of_rolls():
     from diefab.stats.goodness import expected_tvd, goodness_of_fit
 

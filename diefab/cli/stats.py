@@ -83,7 +83,7 @@ def stats(counts: str | None, rolls: Path | None, target: str | None, design_spe
     else:
         goal = parse_target(target, support)
         values, column = read_roll_column(rolls)
-        x = counts_from_rolls(values, goal.values)  # a roll off the target is one line, before any note
+        x = counts_from_rolls(values, goal.values, rolls)  # a roll off the target is one line, before any note
         seq = sequential_test(np.searchsorted(goal.values, values), goal.probabilities, delta, alpha)
         if not as_json:
             note = f"read column {column!r} of {rolls}" if column else f"read {len(values)} rolls of {rolls}"

@@ -89,7 +89,8 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
     if rolls_file is not None:  # read before any drop: a bad log is refused at once
         from diefab.stats.goodness import counts_from_rolls, read_roll_column
 
-        real = counts_from_rolls(read_roll_column(rolls_file)[0], d.support)  # an empty log is refused there
+        rolls = read_roll_column(rolls_file)[0]  # an empty log is refused there
+        real = counts_from_rolls(rolls, d.support, rolls_file)
         inputs = [*inputs, rolls_file]
     if sensitivity:
         if plot_file is not None or report_file is not None or rolls_file is not None or checkpoint is not None:
