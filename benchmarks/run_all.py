@@ -43,6 +43,7 @@ BENCHMARKS = [
     ("fit_center_of_mass.py", [], ["--dice", "binom3,kitten_d3", "--evals", "40"]),
     ("fit_chain.py", [], ["--evals", "20"]),
     ("fit_cuboid_curves.py", ["--per-die"], ["--per-die"]),
+    ("goal_floor.py", [], ["--samples", "200", "--drops", "1000,0"]),
     ("bench_coins.py", ["--rolling-friction", "0,0.01"], ["--sides", "16,128", "--drops", "100"]),
     (
         "bench_coins.py",
