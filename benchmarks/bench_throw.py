@@ -26,7 +26,9 @@ with less energy than this above rest stays in the basin it is in) is a
 second axis, ``--capture``; the horizontal speed a die leaves the hand
 with (``linear_velocity``, uniform from 0 to the candidate's, in any
 direction) a third, ``--slide`` (the prior counts :data:`SLIDE_UNIT` as one
-unit of vigor); ``--flat-faces`` holds the faces a die rests on
+unit of vigor); the radius its edges and corners are rounded to
+(``edge_radius``, model units) a fourth, ``--edge`` (:data:`EDGE_UNIT` one unit
+of vigor); ``--flat-faces`` holds the faces a die rests on
 flat (``flat_faces``) at every candidate.  ``--rest MODEL`` adds a landing model
 (``fast``, ``basins``: what ``diefab predict`` gives) as one more candidate, the
 quasi-static limit of the gentlest throw: its probabilities are weighted as if
@@ -45,8 +47,9 @@ of real dice:
 
 A die's candidate is the one of least deviance of the real counts of the
 dice it is fitted on, plus a normal prior toward the default (vigor 1, no
-capture, no slide; sd ``--prior`` in vigor, in the square root of the
-capture and in slide over :data:`SLIDE_UNIT`),
+capture, no slide, sharp edges; sd ``--prior`` in vigor, in the square root
+of the capture, in slide over :data:`SLIDE_UNIT` and in edge radius over
+:data:`EDGE_UNIT`),
 or a mixture of the candidates (:func:`diefab.search.mixture.fit_weights`).  It is
 scored on its own simulated drops at that candidate, which took no part in the
 choice.  Rules, none of which sees the die it scores:
@@ -63,7 +66,7 @@ choice.  Rules, none of which sees the die it scores:
   candidate, which alone decides for a die with no other die on its
   surface;
 - ``nested``: the rule, and the part of the grid it chooses among (all;
-  vigor up to 2; no capture; no slide; no landing model), chosen for each die by an inner
+  vigor up to 2; no capture; no slide; no rounding; no landing model), chosen for each die by an inner
   leave-one-out over every other die
   (:func:`diefab.search.crossval.nested_choices`, inner loss the TVD on
   their own drops): the held-out score of choosing, too.
@@ -105,9 +108,11 @@ from diefab.search.published import printed_dice, square_cuboid_dice  # noqa: E4
 REST = -1.0
 #: Its coordinates for the prior: the gentlest throw (vigor 0) on a table that keeps every die
 #: in the first basin it rests in (capture 1), with no slide, the quasi-static limit these models assume.
-REST_COORDS = (0.0, 1.0, 0.0)
+REST_COORDS = (0.0, 1.0, 0.0, 0.0)
 #: Horizontal speed (units/s) the prior counts as one unit of vigor: about the speed of a fall of 5 units.
 SLIDE_UNIT = 10.0
+#: Edge radius (model units, L) the prior counts as one unit of vigor: about 0.8 mm on a die of 30 mm.
+EDGE_UNIT = 0.05
 
 
 def main() -> int:
@@ -117,6 +122,9 @@ def main() -> int:
     ap.add_argument("--slide", default="0",
                     help="the candidates' horizontal speed at release, units/s, comma-separated (0 one): the upper "
                          "end of a uniform range from 0 (linear_velocity), in any direction")  # fmt: skip
+    ap.add_argument("--edge", default="0",
+                    help="the candidates' edge and corner radius, model units, comma-separated (0 one): the die "
+                         "rounded (edge_radius)")  # fmt: skip
     ap.add_argument("--flat-faces", action="store_true", help="hold the resting faces flat (flat_faces)")
     ap.add_argument("--each", action="store_true", help="also print every candidate on its own drops, in-sample")
     ap.add_argument("--rest", default="", help="landing models as candidates too, comma-separated (basins, fast)")
@@ -145,12 +153,13 @@ def main() -> int:
         vigor = [float(v) for v in args.vigor.split(",")]
         capture = [float(c) for c in args.capture.split(",")]
         slide = [float(u) for u in args.slide.split(",")]
+        edge = [float(r) for r in args.edge.split(",")]
     except ValueError:
-        raise SystemExit(f"--vigor {args.vigor!r}, --capture {args.capture!r}, --slide {args.slide!r}: "
-                         "numbers separated by commas") from None  # fmt: skip
-    if 1.0 not in vigor or 0.0 not in capture or 0.0 not in slide:
-        raise SystemExit(f"--vigor {args.vigor!r} must include 1, --capture {args.capture!r} and --slide "
-                         f"{args.slide!r} 0: the defaults")  # fmt: skip
+        raise SystemExit(f"--vigor {args.vigor!r}, --capture {args.capture!r}, --slide {args.slide!r}, --edge "
+                         f"{args.edge!r}: numbers separated by commas") from None  # fmt: skip
+    if 1.0 not in vigor or 0.0 not in capture or 0.0 not in slide or 0.0 not in edge:
+        raise SystemExit(f"--vigor {args.vigor!r} must include 1, --capture {args.capture!r}, --slide "
+                         f"{args.slide!r} and --edge {args.edge!r} 0: the defaults")  # fmt: skip
     if not all(0 <= v <= MAX_VIGOR for v in vigor) or not all(0 <= c <= 1 for c in capture):
         raise SystemExit(f"--vigor in [0, {MAX_VIGOR:g}] and --capture in [0, 1]")
     try:  # the speeds the physics takes
@@ -158,10 +167,16 @@ def main() -> int:
             PhysicsSettings(linear_velocity=(0.0, u))
     except PhysicsError as exc:
         raise SystemExit(f"--slide {args.slide!r}: {exc}") from None
+    try:
+        for r in edge:
+            PhysicsSettings(edge_radius=r)
+    except PhysicsError as exc:
+        raise SystemExit(f"--edge {args.edge!r}: {exc}") from None
     rest = [m for m in args.rest.split(",") if m]
     if not set(rest) <= set(LANDING_MODELS):
         raise SystemExit(f"--rest {args.rest!r}: landing models among {', '.join(LANDING_MODELS)}")
-    cands = [(v, c, u) for v in vigor for c in capture for u in slide] + [(REST, m, 0.0) for m in rest]
+    cands = [(v, c, u, r) for v in vigor for c in capture for u in slide for r in edge]
+    cands += [(REST, m, 0.0, 0.0) for m in rest]
     if not args.data.is_dir():
         raise SystemExit(f"no real-rolls folder {args.data}")
     if args.score_drops < 0:
@@ -187,22 +202,23 @@ def main() -> int:
     sims = Simulations(CACHE, args.workers)
     freq = np.zeros((len(dice), len(cands)), dtype=object)
     probs = np.zeros((len(dice), len(cands)), dtype=object)
-    for k, (v, cap, u) in enumerate(cands):
+    for k, (v, cap, u, r) in enumerate(cands):
         if v == REST:  # the landing model's probabilities, weighted as if drawn from as many drops
             for i, d in enumerate(dice):
                 p = value_probabilities(d.design, cap)
                 freq[i, k], probs[i, k] = p, d.symmetrized(smoothed(p * args.drops))
-            print(f"  {label(v, cap, u)}: predicted  ({time.perf_counter() - started:.0f} s)", flush=True)
+            print(f"  {label(v, cap, u, r)}: predicted  ({time.perf_counter() - started:.0f} s)", flush=True)
             continue
         for i, d in enumerate(dice):
-            c = sims.counts_at(d, candidate_settings((v, cap, u), args.flat_faces), args.drops, args.seed)
+            c = sims.counts_at(d, candidate_settings(cands[k], args.flat_faces), args.drops, args.seed)
             freq[i, k], probs[i, k] = c / c.sum(), d.symmetrized(smoothed(c))
-        print(f"  {label(v, cap, u)}: simulated  ({time.perf_counter() - started:.0f} s)", flush=True)
+        print(f"  {label(v, cap, u, r)}: simulated  ({time.perf_counter() - started:.0f} s)", flush=True)
     shutdown_pool()
-    coords = np.array([REST_COORDS if v == REST else (v, np.sqrt(c), u / SLIDE_UNIT) for v, c, u in cands])
-    x0 = np.array([1.0, 0.0, 0.0])
+    coords = np.array([REST_COORDS if v == REST else (v, np.sqrt(c), u / SLIDE_UNIT, r / EDGE_UNIT)
+                       for v, c, u, r in cands])  # fmt: skip
+    x0 = np.array([1.0, 0.0, 0.0, 0.0])
     dev = np.array([[deviance(d.counts, probs[i, k]) for k in range(len(cands))] for i, d in enumerate(dice)])
-    default = cands.index((1.0, 0.0, 0.0))
+    default = cands.index((1.0, 0.0, 0.0, 0.0))
 
     everyone = np.ones(len(cands), dtype=bool)
 
@@ -245,10 +261,11 @@ def main() -> int:
     weights = {name: [m([j for j in range(len(dice)) if j != i], i, everyone) for i in range(len(dice))]
                for name, m in methods.items()}  # fmt: skip
     # the nested score: which rule, over which part of the grid, is itself chosen without the held-out die
-    grids = {"": everyone, " vigor<=2": np.array([v <= 2.0 for v, c, u in cands]),
-             " no capture": np.array([c == 0.0 for v, c, u in cands]),
-             " no slide": np.array([u == 0.0 for v, c, u in cands]),
-             " no rest": np.array([v != REST for v, c, u in cands])}  # fmt: skip
+    grids = {"": everyone, " vigor<=2": np.array([v <= 2.0 for v, c, u, r in cands]),
+             " no capture": np.array([c == 0.0 for v, c, u, r in cands]),
+             " no slide": np.array([u == 0.0 for v, c, u, r in cands]),
+             " no edge": np.array([r == 0.0 for v, c, u, r in cands]),
+             " no rest": np.array([v != REST for v, c, u, r in cands])}  # fmt: skip
     grids = {g: among for g, among in grids.items() if g == "" or not among.all()}
     choices = nested_choices(
         len(dice), {name + g: (lambda rows, i, m=m, among=among: m(list(rows), i, among))
@@ -256,7 +273,7 @@ def main() -> int:
         scored)  # fmt: skip
     weights["nested"] = [w for _, w, _ in choices]
     columns = {"perfect": [perfect_tvd(d, args.drops) for d in dice]}
-    shown = [k for k, (v, cap, u) in enumerate(cands) if cap == 0.0 or v == REST]  # capture columns would not fit
+    shown = [k for k, (v, cap, u, r) in enumerate(cands) if (cap == 0.0 and r == 0.0) or v == REST]  # others: too wide
     columns |= {label(*cands[k]): [d.tvd(freq[i, k]) for i, d in enumerate(dice)] for k in shown}
     for name, ws in weights.items():
         columns[name] = [scored(i, w) for i, w in enumerate(ws)]
@@ -268,6 +285,7 @@ def main() -> int:
         each_candidate(dice, groups, sets, cands, freq)
     slid = slide != [0.0]
     grid_text = f"vigor {args.vigor} x capture {args.capture}" + (f" x slide {args.slide}" if slid else "")
+    grid_text += f" x edge {args.edge}" if edge != [0.0] else ""
     prior_text = "toward vigor 1 without capture" + (f" or slide (slide in {SLIDE_UNIT:g} units/s)" if slid else "")
     print(f"\nTVD to the real rolls, each die scored on its own {args.drops} drops (seed {args.seed}); "
           f"candidates: {grid_text}{', flat faces' * args.flat_faces}; prior sd {args.prior:g} {prior_text}; "
@@ -306,9 +324,10 @@ def goal_sets(dice, groups, sets) -> list[tuple[str, list[int]]]:
 
 
 def candidate_settings(cand: tuple[float, float, float], flat_faces: bool) -> PhysicsSettings:
-    """The physics of a simulated candidate (vigor, capture, slide)."""
-    v, cap, u = cand
-    return throw_settings(v, PhysicsSettings(capture_energy=cap, flat_faces=flat_faces, linear_velocity=(0.0, u)))
+    """The physics of a simulated candidate (vigor, capture, slide, edge radius)."""
+    v, cap, u, r = cand
+    return throw_settings(v, PhysicsSettings(capture_energy=cap, flat_faces=flat_faces, linear_velocity=(0.0, u),
+                                             edge_radius=r))  # fmt: skip
 
 
 def fresh_scores(dice, groups, sets, cands, weights, default, noise, sims, args, started) -> None:
@@ -323,7 +342,7 @@ def fresh_scores(dice, groups, sets, cands, weights, default, noise, sims, args,
                   | {(i, default) for i in range(len(dice))})  # fmt: skip
     fresh = {}
     for n, (i, k) in enumerate(need, 1):
-        v, cap, _ = cands[k]
+        v, cap, _, _ = cands[k]
         if v == REST:
             fresh[i, k] = value_probabilities(dice[i].design, cap)
             continue
@@ -368,16 +387,17 @@ def each_candidate(dice, groups, sets, cands, freq) -> None:
         print(f"  {label(*cand):<16} " + " ".join(f"{x:>13.4f}" for x in [t[i] for i in first] + means))
 
 
-def chosen_label(w: np.ndarray, cands: list[tuple[float, float | str, float]]) -> str:
+def chosen_label(w: np.ndarray, cands: list[tuple[float, float | str, float, float]]) -> str:
     """The candidates of weights `w` of at least 0.2, with their weights when mixed."""
     return "+".join(f"{x:.2f} {label(*cands[k])}" if x < 1 else label(*cands[k]) for k, x in enumerate(w) if x >= 0.2)
 
 
-def label(vigor: float, capture: float | str, slide: float = 0.0) -> str:
-    """A candidate's column: its vigor, and its capture and slide when it has them; or the landing model."""
+def label(vigor: float, capture: float | str, slide: float = 0.0, edge: float = 0.0) -> str:
+    """A candidate's column: its vigor, and its capture, slide and edge radius where set; or the landing model."""
     if vigor == REST:
         return capture
-    return f"v={vigor:g}" + (f" c={capture:g}" if capture else "") + (f" u={slide:g}" if slide else "")
+    return (f"v={vigor:g}" + (f" c={capture:g}" if capture else "") + (f" u={slide:g}" if slide else "")
+            + (f" r={edge:g}" if edge else ""))  # fmt: skip
 
 
 if __name__ == "__main__":
