@@ -44,16 +44,16 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from diefab.search.fidelity import LANDING_MODELS, load_real_dice, noise_tvd  # noqa: E402
-from diefab.search.published import printed_dice, square_cuboid_dice  # noqa: E402
-
 sys.path.insert(0, str(ROOT / "benchmarks"))
+
 from bench_calibrate import Simulations  # noqa: E402
 from bench_heldout import CACHE  # noqa: E402
 from fit_cuboid_curves import curves, fit  # noqa: E402
 
 from diefab.physics.simulate import shutdown_pool  # noqa: E402
 from diefab.physics.throw import throw_settings  # noqa: E402
+from diefab.search.fidelity import LANDING_MODELS, load_real_dice, noise_tvd  # noqa: E402
+from diefab.search.published import printed_dice, square_cuboid_dice  # noqa: E402
 
 REALROLLS = ROOT / ".." / "shared" / "realrolls"
 LAW = "two-sided logit 2"
@@ -112,6 +112,8 @@ def main(argv: list[str] | None = None) -> int:
         raise SystemExit(f"--drops {args.drops!r}: whole numbers, comma-separated") from None
     if not drops or min(drops) < 0:
         raise SystemExit(f"--drops {args.drops!r}: each >= 0")
+    if args.samples < 1:
+        raise SystemExit(f"--samples {args.samples}: at least 1")
     if not args.data.is_dir():
         raise SystemExit(f"no real-rolls folder {args.data}")
     rng = np.random.default_rng(args.seed)
