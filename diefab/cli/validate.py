@@ -90,7 +90,7 @@ def validate(ctx, design, params, sims, seed, workers, scheduler, plot_file, rep
         from diefab.stats.goodness import counts_from_rolls, read_roll_column
 
         rolls = read_roll_column(rolls_file)[0]  # an empty log is refused there
-        real = counts_from_rolls(rolls, d.support, rolls_file)
+        real = counts_from_rolls(rolls, d.support, rolls_file, of="the die")
         inputs = [*inputs, rolls_file]
     if sensitivity:
         if plot_file is not None or report_file is not None or rolls_file is not None or checkpoint is not None:

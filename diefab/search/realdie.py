@@ -147,7 +147,7 @@ def real_die(name: str, design: Design, counts: Sequence[int] | str, **kwargs: A
         if isinstance(counts, str):
             path = Path(counts)
             if path.exists():  # a roll log; one that is no regular file (a folder, a pipe) is named as such
-                counts = counts_from_rolls(read_rolls(path), design.support, path)
+                counts = counts_from_rolls(read_rolls(path), design.support, path, of="the die")
             else:
                 counts = parse_counts(counts)
     except StatsError as exc:

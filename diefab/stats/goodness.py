@@ -541,11 +541,14 @@ def _read_column(path: Path, lines: list[tuple[int, str]]) -> tuple[list[int], s
     return values, name
 
 
-def counts_from_rolls(rolls: Sequence[int], support: Sequence[int], source: str | Path | None = None) -> np.ndarray:
+def counts_from_rolls(
+    rolls: Sequence[int], support: Sequence[int], source: str | Path | None = None, of: str = "the target"
+) -> np.ndarray:
     """Count each value of `support` in `rolls`; a roll outside the support is an error.
 
-    The error names the first such roll by its place among the rolls, and
-    `source` (the file they were read from) when given.
+    The error names the first such roll by its place among the rolls,
+    `source` (the file they were read from) when given, and what `support`
+    holds the values `of`.
     """
     index = {int(v): i for i, v in enumerate(support)}
     bad = next((k for k, r in enumerate(rolls) if int(r) not in index), None)
@@ -553,6 +556,6 @@ def counts_from_rolls(rolls: Sequence[int], support: Sequence[int], source: str 
         where = f"{source}: " if source is not None else ""
         raise StatsError(
             f"{where}roll {bad + 1} of {len(rolls)} is {int(rolls[bad])}, "
-            f"not a value of the target ({', '.join(map(str, support))})"
+            f"not a value of {of} ({', '.join(map(str, support))})"
         )
     return np.bincount([index[int(r)] for r in rolls], minlength=len(index)).astype(np.int64)
