@@ -983,6 +983,24 @@ def _holder(target: Path):
     return proc
 
 
+def test_two_paths_to_one_file_through_a_link_share_its_lock(tmp_path):
+    from diefab.core.files import ExclusiveLock, LockError
+
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    log = tmp_path / "a" / "d6-rolls.csv"
+    log.write_text("time,value,face,confidence,frame\n")
+    (tmp_path / "b" / "d6-rolls.csv").symlink_to(log)
+    proc = _holder(log)
+    try:
+        with pytest.raises(LockError, match=f"in use by process {proc.pid}"):
+            ExclusiveLock(tmp_path / "b" / "d6-rolls.csv", "roll log").acquire()
+    finally:
+        proc.kill()
+        proc.wait()
+        proc.stdout.close()
+
+
 @pytest.mark.parametrize("fresh", [True, False], ids=["fresh", "resume"])
 def test_a_second_process_on_a_run_is_refused_naming_the_holder(tmp_path, bad, run, fresh):
     folder = tmp_path / "r"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import shutil
 
 import numpy as np
@@ -14,6 +15,7 @@ if not hasattr(cv2, "aruco"):
 from diefab import load_design  # noqa: E402
 from diefab.camera.pose import Camera, MarkerDetector, read_frame  # noqa: E402
 from diefab.camera.rig import rendered_rests  # noqa: E402
+from diefab.core.errors import StatsError  # noqa: E402
 from diefab.dice.markers import marker_layout  # noqa: E402
 from diefab.stats.rolllog import Roll, append_roll, read_log, remove_last_roll  # noqa: E402
 
@@ -97,6 +99,36 @@ def test_a_photo_too_small_to_read_is_one_line(tmp_path, capsys, size):
     assert _read("d6", "--images", mine, "--out", tmp_path) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "pixels" in err
+
+
+def test_a_photo_whose_name_is_not_utf8_is_read(photos, tmp_path):
+    folder, truth = photos
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    shutil.copy(folder / "00.png", mine / os.fsdecode(b"\xe9t\xe9.png"))
+    assert _read("d6", "--images", mine, "--out", tmp_path) == 0
+    assert [r.value for r in read_log(tmp_path / "d6-rolls.csv").rolls] == truth[:1]
+
+
+def test_the_picture_show_keeps_is_never_read_as_a_photo(photos, tmp_path):
+    folder, truth = photos
+    for name in ("00.png", "01.png"):
+        shutil.copy(folder / name, tmp_path / name)
+    shutil.copy(folder / "02.png", tmp_path / "d6-live.png")  # what --show leaves where no window opens
+    assert _read("d6", "--images", tmp_path, "--out", tmp_path) == 0
+    assert [r.value for r in read_log(tmp_path / "d6-rolls.csv").rolls] == truth[:2]
+
+
+def test_an_append_cut_short_leaves_the_log_as_it_was(tmp_path, monkeypatch):
+    path = tmp_path / "rolls.csv"
+    append_roll(path, Roll("0.000", 4, "f6", 1.0, 0, "sha256:0123456789abcdef a.png"))
+    before = path.read_bytes()
+    write = os.write
+    monkeypatch.setattr(os, "write", lambda fd, data: write(fd, data[: len(data) // 2]))  # a full disk
+    with pytest.raises(StatsError, match="whole roll"):
+        append_roll(path, Roll("1.000", 5, "f5", 1.0, 1, "sha256:fedcba9876543210 b.png"))
+    monkeypatch.undo()
+    assert path.read_bytes() == before
 
 
 def test_a_torn_last_line_is_cut_before_rolls_are_appended(photos, tmp_path):

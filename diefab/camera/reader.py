@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -58,6 +59,8 @@ MOTION_LEVEL = 0.12
 MOTION_PIXELS = 6
 #: Least width and height of a frame, pixels.
 MIN_FRAME = 64
+#: The largest image file read, bytes.
+MAX_PHOTO_BYTES = 512 << 20
 #: Frames with markers of other dictionaries only, and none of the die's, before the reader gives up.
 FOREIGN_FRAMES = 10
 
@@ -229,8 +232,17 @@ def read_photo(path: str | Path) -> np.ndarray:
     """
     import cv2
 
+    path = Path(path)
+    try:  # read here, not by OpenCV: any file name Python can open, and a size checked before decoding
+        if path.stat().st_size > MAX_PHOTO_BYTES:
+            raise SourceError(f"image {path} is larger than {MAX_PHOTO_BYTES >> 20} MiB")
+        data = np.frombuffer(path.read_bytes(), dtype=np.uint8)
+    except OSError as exc:
+        raise SourceError(f"cannot read image {path}: {exc.strerror or exc}") from None
+    _quiet_opencv()
     try:
-        image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
+        with _native_stderr_silenced():  # libpng and libjpeg write their own complaints to the process's stderr
+            image = cv2.imdecode(data, cv2.IMREAD_GRAYSCALE) if data.size else None
     except cv2.error as exc:
         why = "more pixels than OpenCV decodes" if "CV_IO_MAX_IMAGE_PIXELS" in str(exc) else _last_line(exc)
         raise SourceError(f"cannot read image {path}: {why}") from None
@@ -238,6 +250,36 @@ def read_photo(path: str | Path) -> np.ndarray:
         raise SourceError(f"cannot read image {path}")
     check_frame(image, f"image {path}")
     return image
+
+
+def _quiet_opencv() -> None:
+    """OpenCV's own log off: a source that cannot be read is one line, the caller's."""
+    import cv2
+
+    try:
+        cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+    except AttributeError:
+        pass
+
+
+@contextmanager
+def _native_stderr_silenced() -> Iterator[None]:
+    """File descriptor 2 pointed at the null device for the duration, where C libraries write directly."""
+    try:
+        saved = os.dup(2)
+    except OSError:  # no stderr to silence
+        yield
+        return
+    try:
+        null = os.open(os.devnull, os.O_WRONLY)
+        try:
+            os.dup2(null, 2)
+        finally:
+            os.close(null)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
 
 
 def _last_line(exc: Exception) -> str:
@@ -284,6 +326,10 @@ def frames(
         path = Path(video)
         if not path.is_file():
             raise SourceError(f"video {path} {'is not a regular file' if path.exists() else 'does not exist'}")
+        try:  # OpenCV takes the name as UTF-8, and fails hard on a name that is not
+            str(path).encode("utf-8")
+        except UnicodeEncodeError:
+            raise SourceError(f"video {path}: its name is not valid UTF-8; rename the file") from None
         capture, name = cv2.VideoCapture(str(path)), f"video {video}"
     else:
         capture, name = cv2.VideoCapture(int(camera)), f"camera {camera}"

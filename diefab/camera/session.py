@@ -69,8 +69,11 @@ class LogReading:
         self._pending: list[Roll] = []
         self.skipped = 0
 
-    def read(self, *, camera: int | None = None, video=None, images=None) -> Iterator[Reading]:
+    def read(self, *, camera: int | None = None, video=None, images=None, ignore=()) -> Iterator[Reading]:
         """Read exactly one source, yielding every frame; each roll is in the log once the die has been seen.
+
+        `ignore` names files of an image folder that are not photos of rolls
+        (the pictures the reading itself writes there).
 
         Raises
         ------
@@ -78,7 +81,7 @@ class LogReading:
             As :func:`~.reader.frames` and :class:`~.reader.RollReader`: a bad source, or another die.
         """
         if images is not None:
-            stream = self._photos(images)
+            stream = self._photos(images, {Path(p).resolve() for p in ignore})
         else:
             stream = ((t, gray, None) for t, gray in frames(camera=camera, video=video))
         reader = self.reader
@@ -105,9 +108,9 @@ class LogReading:
         photos = f"{n} photo{'s' * (n != 1)} of {folder} {'were' if n != 1 else 'was'}"
         return f"{photos} read before (in the log, or a copy of another): not read again"
 
-    def _photos(self, folder) -> Iterator[tuple[float, np.ndarray, str]]:
+    def _photos(self, folder, ignore: set[Path]) -> Iterator[tuple[float, np.ndarray, str]]:
         todo = []
-        for i, path in enumerate(photo_files(folder)):
+        for i, path in enumerate(p for p in photo_files(folder) if p.resolve() not in ignore):
             digest = photo_digest(path)
             if digest in self._digests:
                 self.skipped += 1

@@ -40,11 +40,13 @@ def bars(tally, width: int = BAR_WIDTH, *, keys: bool = True):
     return table
 
 
-def tally_view(tally, label: str, title: str, *, keys: bool = False):
-    """A rich renderable: `title`, the bars of :func:`bars` and the verdict line against `label`."""
+def tally_view(tally, label: str, title: str, *, keys: bool = False, verdict: bool = True):
+    """A rich renderable: `title`, the bars of :func:`bars` and (with `verdict`) the verdict line against `label`."""
     from rich.console import Group
     from rich.text import Text
 
     from diefab.stats.verdict import sequential_line
 
+    if not verdict:
+        return Group(Text(title), bars(tally, keys=keys))
     return Group(Text(title), bars(tally, keys=keys), Text(sequential_line(tally.result(), label), style="bold"))

@@ -59,7 +59,8 @@ def read(
     session = LogReading(reader, log)
     done = [r.value for r in session.rows if r.value is not None]
     tally = Tally(d.support, d.target_distribution.aligned(d.support), delta, done)
-    source = session.read(camera=camera_index, video=video, images=images)
+    live = live_picture(out_dir, name or d.name)  # what --show writes is never read as a photo
+    source = session.read(camera=camera_index, video=video, images=images, ignore=[live])
     first = next(source, None)  # opens the source: a bad one fails here, before the live table is drawn
     source = itertools.chain([] if first is None else [first], source)
     new = _run(d, session, source, tally, show, out_dir, name)
@@ -84,31 +85,46 @@ def _run(d, session, source, tally, show, out_dir, name) -> int:
     label = target_label(d.target)
     reader = session.reader
 
-    def view():
+    def view(verdict: bool = True):
         unread = sum(r.value is None for r in session.rows)
         title = f"{d.name} against {label}: {tally.n} rolls read, {unread} unread (frame {reader.frame + 1})"
-        return tally_view(tally, label, title)
+        return tally_view(tally, label, title, verdict=verdict)
 
+    out = console()
+    if not out.is_terminal:  # a file or a pipe gets the table once, when reading is done; the verdict follows it
+        new = _read_all(d, reader, source, tally, show, out_dir, name)
+        out.print(view(verdict=False))
+        return new
     new = 0
-    with Live(view(), console=console(), refresh_per_second=4, transient=False) as live:
+    with Live(view(), console=out, refresh_per_second=4, transient=False) as live:
         for step in source:
-            if show and step.seen is not None:
-                _show(d, reader, step.gray, step.seen, out_dir, name)
-            if step.roll is None:
-                continue
-            new += 1
-            if step.roll.value is not None:
-                tally.add(step.roll.value)
+            new += _take(d, reader, step, tally, show, out_dir, name)
             live.update(view())
         live.update(view())
     return new
+
+
+def _read_all(d, reader, source, tally, show, out_dir, name) -> int:
+    """Read `source` to its end; returns the number of rolls read."""
+    return sum(_take(d, reader, step, tally, show, out_dir, name) for step in source)
+
+
+def _take(d, reader, step, tally, show, out_dir, name) -> int:
+    """One step of the reading: shown when asked, its roll counted; 1 if it read a roll, else 0."""
+    if show and step.seen is not None:
+        _show(d, reader, step.gray, step.seen, out_dir, name)
+    if step.roll is None:
+        return 0
+    if step.roll.value is not None:
+        tally.add(step.roll.value)
+    return 1
 
 
 def _show(d, reader, gray, seen, out_dir, name) -> None:
     import cv2
 
     from diefab.camera.render import draw_detection
-    from diefab.core.files import atomic_write, output_path
+    from diefab.core.files import atomic_write
 
     image = draw_detection(gray, seen, d, reader.layout, reader.camera)
     try:
@@ -117,4 +133,11 @@ def _show(d, reader, gray, seen, out_dir, name) -> None:
     except cv2.error:  # a headless OpenCV has no window: keep the latest frame in a file
         ok, data = cv2.imencode(".png", image)
         if ok:
-            atomic_write(output_path(out_dir, name or d.name, "-live.png"), data.tobytes())
+            atomic_write(live_picture(out_dir, name or d.name), data.tobytes())
+
+
+def live_picture(out_dir, name: str):
+    """The file ``--show`` keeps the latest frame in, where no window can open."""
+    from diefab.core.files import output_path
+
+    return output_path(out_dir, name, "-live.png")

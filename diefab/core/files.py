@@ -180,7 +180,7 @@ class ExclusiveLock:
     """
 
     def __init__(self, target: str | Path, what: str) -> None:
-        target = Path(os.path.abspath(target))
+        target = Path(os.path.realpath(target))  # two paths to one file, through a link, share one lock
         self.path = target.parent / f".{_short(target)}.lock"
         self.what = what
         self._fd: int | None = None

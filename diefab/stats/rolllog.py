@@ -293,9 +293,11 @@ def repair_log(path: str | Path) -> int:
 
 
 def append_roll(path: str | Path, roll: Roll) -> None:
-    """Append one roll durably: one whole line, one write, then fsync.
+    """Append one roll durably: its lines in one write, then fsync.
 
-    The log is created with its header if it does not exist.
+    The log is created with its header if it does not exist.  A write that
+    fails or is cut short (a full disk) is cut back off, so that the log
+    holds the roll whole, with its source, or not at all.
     """
     path = Path(path)
     if not path.exists():
@@ -306,14 +308,28 @@ def append_roll(path: str | Path, roll: Roll) -> None:
     except OSError as exc:
         raise StatsError(f"cannot append to roll log {path}: {exc.strerror or exc}") from exc
     try:
-        written = os.write(fd, payload)
-        if written != len(payload):
-            raise StatsError(f"could not append a whole roll to {path} (disk full?)")
-        os.fsync(fd)
+        size = os.fstat(fd).st_size
+        try:
+            written = os.write(fd, payload)
+            if written != len(payload):
+                raise StatsError(f"could not append a whole roll to {path} (disk full?)")
+            os.fsync(fd)
+        except (OSError, StatsError):
+            _cut_back(fd, size)
+            raise
     except OSError as exc:
         raise StatsError(f"cannot append to roll log {path}: {exc.strerror or exc}") from exc
     finally:
         os.close(fd)
+
+
+def _cut_back(fd: int, size: int) -> None:
+    """Truncate the file open as `fd` to `size` bytes, as far as the system lets."""
+    try:
+        os.ftruncate(fd, size)
+        os.fsync(fd)
+    except OSError:
+        pass
 
 
 def remove_last_roll(path: str | Path) -> Roll:
