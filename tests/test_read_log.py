@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
 
@@ -138,6 +139,28 @@ def test_a_torn_last_line_is_cut_before_rolls_are_appended(photos, tmp_path):
     assert _read("d6", "--images", folder, "--out", tmp_path) == 0
     rolls = read_log(log).rolls
     assert [r.value for r in rolls] == [3, *truth]
+
+
+def test_a_header_without_its_line_end_is_a_log_to_append_to(photos, tmp_path):
+    folder, truth = photos
+    log = tmp_path / "d6-rolls.csv"
+    log.write_text("time,value,face,confidence,frame")
+    assert read_log(log).rolls == () and read_log(log).torn
+    assert _read("d6", "--images", folder, "--out", tmp_path) == 0
+    assert [r.value for r in read_log(log).rolls] == truth
+
+
+def test_stats_says_when_it_leaves_out_a_last_line_cut_short(tmp_path, capsys):
+    from diefab.cli import main
+
+    log = tmp_path / "rolls.csv"
+    log.write_text("time,value,face,confidence,frame\n,1,,,\n,2,,,\n,3,,,")
+    with pytest.raises(SystemExit) as stop:
+        main(["stats", "--rolls", str(log), "--target", "uniform:3", "--json"])
+    assert stop.value.code == 0 and json.loads(capsys.readouterr().out)["n"] == 2
+    with pytest.raises(SystemExit):
+        main(["stats", "--rolls", str(log), "--target", "uniform:3"])
+    assert "last line has no line end and is left out" in capsys.readouterr().err
 
 
 def test_a_roll_s_source_round_trips_and_goes_with_it_on_undo(tmp_path):

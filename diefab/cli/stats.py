@@ -87,6 +87,8 @@ def stats(counts: str | None, rolls: Path | None, target: str | None, design_spe
         seq = sequential_test(np.searchsorted(goal.values, values), goal.probabilities, delta, alpha)
         if not as_json:
             note = f"read column {column!r} of {rolls}" if column else f"read {len(values)} rolls of {rolls}"
+            if _cut_short(rolls):
+                note += "; its last line has no line end and is left out, as a roll cut short by a crash"
             click.echo(note, err=True)
     if sequential:
         return _sequential(seq, target, column, as_json)
@@ -195,3 +197,14 @@ def _sequential(seq, target: str, column: str | None, as_json: bool) -> None:
         emit_json(out)
         return
     console().print(sequential_line(seq, target_label(target)))
+
+
+def _cut_short(path) -> bool:
+    """Whether `path` is a roll log whose last line has no line end (which reading it leaves out)."""
+    from diefab.core.errors import StatsError
+    from diefab.stats.rolllog import read_log
+
+    try:
+        return read_log(path).torn
+    except StatsError:  # not a roll log: every line of it was read
+        return False

@@ -242,7 +242,7 @@ def read_log(path: str | Path) -> RollLog:
     text = _read_text(path)
     lines = text.split("\n")
     torn = lines[-1] != ""  # the last line has no newline: cut short by a crash
-    lines = lines[:-1]
+    lines = lines[:-1] if len(lines) > 1 or not is_roll_log(lines[0]) else lines  # a header alone is a header
     if not lines or not is_roll_log(lines[0]):
         raise StatsError(f"{path}:1: not a roll log (its first line must be {','.join(HEADER)})")
     rolls = []
@@ -283,11 +283,15 @@ def repair_log(path: str | Path) -> int:
         with open(path, "rb+") as f:
             data = f.read()
             keep = data.rfind(b"\n") + 1
-            if keep < len(data):
+            if keep == 0:  # the header alone, without its line end: end it
+                f.write(b"\n")
+            elif keep < len(data):
                 f.truncate(keep)
-                f.flush()
-                os.fsync(f.fileno())
-            return len(data) - keep
+            else:
+                return 0
+            f.flush()
+            os.fsync(f.fileno())
+            return len(data) - keep if keep else 0
     except OSError as exc:
         raise StatsError(f"cannot open roll log {path} for writing: {exc.strerror or exc}") from exc
 
