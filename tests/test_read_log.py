@@ -163,6 +163,22 @@ def test_stats_says_when_it_leaves_out_a_last_line_cut_short(tmp_path, capsys):
     assert "last line has no line end and is left out" in capsys.readouterr().err
 
 
+def test_undo_removes_the_last_roll_read_and_keeps_the_unread_after_it(tmp_path):
+    path = tmp_path / "rolls.csv"
+    for roll in (Roll("0.000", 4, "f6", 1.0, 0, "sha256:0123456789abcdef a.png"),
+                 Roll("1.000", 5, "f5", 1.0, 1, "sha256:fedcba9876543210 b.png"),
+                 Roll("2.000", None, None, 0.2, 2, "sha256:00000000000000ff c.png")):  # fmt: skip
+        append_roll(path, roll)
+    assert remove_last_roll(path).value == 5
+    log = read_log(path)
+    assert [r.value for r in log.rolls] == [4, None]
+    assert log.digests == {"sha256:0123456789abcdef", "sha256:00000000000000ff"}
+    assert remove_last_roll(path).value == 4
+    with pytest.raises(StatsError, match="no roll read"):
+        remove_last_roll(path)
+    assert [r.value for r in read_log(path).rolls] == [None]
+
+
 def test_a_roll_s_source_round_trips_and_goes_with_it_on_undo(tmp_path):
     path = tmp_path / "rolls.csv"
     append_roll(path, Roll("0.000", 4, "f6", 1.0, 0, "sha256:0123456789abcdef a b.png"))

@@ -337,26 +337,41 @@ def _cut_back(fd: int, size: int) -> None:
 
 
 def remove_last_roll(path: str | Path) -> Roll:
-    """Remove the last roll from the log (an undo) by cutting the file before its line; returns it.
+    """Remove the last roll read (an undo of the last value counted) from the log; returns it.
 
-    A torn last line goes too.  The cut is one ``ftruncate`` followed by
-    ``fsync``: the log holds the roll or not, never part of it.
+    Its source line goes with it, and so does a torn last line; rolls seen
+    but not read after it stay.  When it is the log's last roll the cut is
+    one ``ftruncate`` followed by ``fsync``, else the log is rewritten
+    atomically: the log holds the roll or not, never part of it.
     """
     path = Path(path)
     log = read_log(path)
-    if not log.rolls:
-        raise StatsError(f"roll log {path} has no roll to remove")
+    read = [r for r in log.rolls if r.value is not None]
+    if not read:
+        raise StatsError(f"roll log {path} has no roll read to remove")
     try:
         with open(path, "rb+") as f:
             data = f.read()
             lines = data[: data.rfind(b"\n") + 1].split(b"\n")[:-1]
-            while lines:  # drop trailing blank or comment lines, then the last roll's line
-                last = lines.pop().strip()
-                if last and not last.startswith(b"#"):
-                    break
-            f.truncate(sum(len(line) + 1 for line in lines))
+            j = max(i for i in range(1, len(lines)) if _read_roll_line(lines[i]))
+            k = j + 1  # the comment lines that follow a roll are its own (its source)
+            while k < len(lines) and (not lines[k].strip() or lines[k].lstrip().startswith(b"#")):
+                k += 1
+            if any(line.strip() for line in lines[k:]):  # unread rolls after it stay
+                atomic_write(path, b"".join(line + b"\n" for line in lines[:j] + lines[k:]))
+                return read[-1]
+            f.truncate(sum(len(line) + 1 for line in lines[:j]))
             f.flush()
             os.fsync(f.fileno())
     except OSError as exc:
         raise StatsError(f"cannot remove the last roll of {path}: {exc.strerror or exc}") from exc
-    return log.rolls[-1]
+    return read[-1]
+
+
+def _read_roll_line(line: bytes) -> bool:
+    """Whether a line of a log (read strictly before) is a roll with a value."""
+    text = line.decode("utf-8", errors="replace").strip()
+    if not text or text.startswith("#"):
+        return False
+    row = next(csv.reader(io.StringIO(text)))
+    return len(row) == len(HEADER) and bool(row[1].strip())
