@@ -17,6 +17,7 @@ images; bad input raises :class:`~.pose.MarkerError` or
 from __future__ import annotations
 
 import os
+import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -266,8 +267,9 @@ def _quiet_opencv() -> None:
 def _native_stderr_silenced() -> Iterator[None]:
     """File descriptor 2 pointed at the null device for the duration, where C libraries write directly."""
     try:
+        sys.stderr.flush()  # what Python holds for stderr goes out first
         saved = os.dup(2)
-    except OSError:  # no stderr to silence
+    except (OSError, ValueError, AttributeError):  # no stderr to silence
         yield
         return
     try:
