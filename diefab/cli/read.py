@@ -92,7 +92,7 @@ def _run(d, session, source, tally, show, out_dir, name) -> int:
 
     out = console()
     if not out.is_terminal:  # a file or a pipe gets the table once, when reading is done; the verdict follows it
-        new = _read_all(d, reader, source, tally, show, out_dir, name)
+        new = sum(_take(d, reader, step, tally, show, out_dir, name) for step in source)
         out.print(view(verdict=False))
         return new
     new = 0
@@ -102,11 +102,6 @@ def _run(d, session, source, tally, show, out_dir, name) -> int:
             live.update(view())
         live.update(view())
     return new
-
-
-def _read_all(d, reader, source, tally, show, out_dir, name) -> int:
-    """Read `source` to its end; returns the number of rolls read."""
-    return sum(_take(d, reader, step, tally, show, out_dir, name) for step in source)
 
 
 def _take(d, reader, step, tally, show, out_dir, name) -> int:
