@@ -240,7 +240,7 @@ def read_photo(path: str | Path) -> np.ndarray:
         data = np.frombuffer(path.read_bytes(), dtype=np.uint8)
     except OSError as exc:
         raise SourceError(f"cannot read image {path}: {exc.strerror or exc}") from None
-    _quiet_opencv()
+    _opencv_log("SILENT")  # a photo that cannot be decoded is one line, the caller's
     try:
         with _native_stderr_silenced():  # libpng and libjpeg write their own complaints to the process's stderr
             image = cv2.imdecode(data, cv2.IMREAD_GRAYSCALE) if data.size else None
@@ -253,12 +253,12 @@ def read_photo(path: str | Path) -> np.ndarray:
     return image
 
 
-def _quiet_opencv() -> None:
-    """OpenCV's own log off: a source that cannot be read is one line, the caller's."""
+def _opencv_log(level: str) -> None:
+    """OpenCV's own log at `level` (``ERROR``, ``SILENT``, ...), where this OpenCV has the setting."""
     import cv2
 
     try:
-        cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+        cv2.utils.logging.setLogLevel(getattr(cv2.utils.logging, f"LOG_LEVEL_{level}"))
     except AttributeError:
         pass
 
@@ -312,10 +312,7 @@ def frames(
     """
     import cv2
 
-    try:  # a camera that cannot be opened is reported in one line, not in OpenCV's warnings too
-        cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
-    except AttributeError:
-        pass
+    _opencv_log("ERROR")  # a camera that cannot be opened is reported in one line, not in OpenCV's warnings too
     # nor a file FFmpeg cannot decode in FFmpeg's own lines (OpenCV reads this when it first opens a video)
     os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
     if sum(x is not None for x in (camera, video, images)) != 1:
