@@ -205,6 +205,10 @@ def _cut_short(path) -> bool:
     from diefab.stats.rolllog import read_log
 
     try:
+        with open(path, "rb") as f:  # only a file without a final line end is read again
+            f.seek(-1, 2)
+            if f.read(1) == b"\n":
+                return False
         return read_log(path).torn
-    except StatsError:  # not a roll log: every line of it was read
+    except (OSError, StatsError):  # not a roll log (every line of it was read), or nothing to look at
         return False
