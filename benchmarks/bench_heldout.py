@@ -509,10 +509,19 @@ def perfect_means(dice, drops: int, samples: int = 4000, seed: int = 0) -> np.nd
 
 def perfect_tvd(die, drops: int, samples: int = 4000, seed: int = 0) -> float:
     """Expected TVD of a perfect model scored on `drops` simulated drops (real and simulated counts both vary)."""
-    rng = np.random.default_rng(seed)
-    real = rng.multinomial(die.n, die.frequencies, size=samples) / die.n
-    sim = rng.multinomial(drops, die.frequencies, size=samples) / drops
-    return float(np.mean([die.tvd(s, r) for s, r in zip(sim, real)]))
+    return scored_tvd(die, die.frequencies, drops, samples, np.random.default_rng(seed), real=True)
+
+
+def scored_tvd(die, q: np.ndarray, drops: int, samples: int, rng: np.random.Generator, real: bool) -> float:
+    """Mean TVD of probabilities `q` to the die's rolls, scored on `drops` drops drawn from `q` (0: `q` itself).
+
+    With `real`, the rolls too are drawn afresh (from `q`: the model is the
+    die's truth); without, they are the die's own rolls.
+    """
+    shape = (samples, q.size)
+    rolls = rng.multinomial(die.n, q, size=samples) / die.n if real else np.broadcast_to(die.frequencies, shape)
+    sim = np.broadcast_to(q, rolls.shape) if drops == 0 else rng.multinomial(drops, q, size=samples) / drops
+    return float(np.mean([die.tvd(s, r) for s, r in zip(sim, rolls)]))
 
 
 def fmt_coords(x: np.ndarray) -> str:

@@ -47,7 +47,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 from bench_calibrate import Simulations  # noqa: E402
-from bench_heldout import CACHE  # noqa: E402
+from bench_heldout import CACHE, scored_tvd  # noqa: E402
 from fit_cuboid_curves import curves, fit  # noqa: E402
 
 from diefab.physics.simulate import shutdown_pool  # noqa: E402
@@ -60,18 +60,6 @@ LAW = "two-sided logit 2"
 GOAL = 1.3
 #: The (drops, seed) of the default physics' runs in ``bench_throw.py``.
 DEFAULT_RUNS = ((1000, 3), (3000, 6))
-
-
-def scored_tvd(die, q: np.ndarray, drops: int, samples: int, rng: np.random.Generator, real: bool) -> float:
-    """Mean TVD of probabilities `q` to the die's rolls, scored on `drops` drops drawn from `q` (0: `q` itself).
-
-    With `real`, the rolls too are drawn afresh (from `q`: the model is the
-    die's truth); without, they are the die's own rolls.
-    """
-    shape = (samples, q.size)
-    rolls = rng.multinomial(die.n, q, size=samples) / die.n if real else np.broadcast_to(die.frequencies, shape)
-    sim = np.broadcast_to(q, rolls.shape) if drops == 0 else rng.multinomial(drops, q, size=samples) / drops
-    return float(np.mean([die.tvd(s, r) for s, r in zip(sim, rolls)]))
 
 
 def ratio_laws(cuboids) -> tuple[np.ndarray, np.ndarray]:
