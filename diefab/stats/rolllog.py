@@ -270,7 +270,7 @@ def read_log(path: str | Path) -> RollLog:
 
 
 def repair_log(path: str | Path) -> int:
-    """Create the log with its header if missing; cut a torn last line.  Returns the bytes cut.
+    """Create the log with its header if missing; cut a torn last line, or end a header alone.  Returns the bytes cut.
 
     Call it once, holding the log's lock, before appending.
     """
